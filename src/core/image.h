@@ -1,0 +1,30 @@
+// RGB float images and their file formats: OpenEXR (linear), PNG/JPEG/BMP/TGA/HDR (stb).
+#pragma once
+#include "core/vector.h"
+
+#include <string>
+#include <vector>
+
+namespace penumbra {
+
+struct Image {
+    int width = 0, height = 0;
+    std::vector<Color3f> pixels; // row-major, top row first
+
+    Image() = default;
+    Image(int w, int h, const Color3f& fill = Color3f(0.f)) : width(w), height(h), pixels(size_t(w) * h, fill) {}
+    Color3f& at(int x, int y) { return pixels[size_t(y) * width + x]; }
+    const Color3f& at(int x, int y) const { return pixels[size_t(y) * width + x]; }
+};
+
+// Reads EXR (linear) or an 8-bit/HDR format via stb; 8-bit images are converted from sRGB to linear when
+// `srgb_to_linear` is set (Mitsuba's `raw=false`). Throws Error naming the file on failure.
+Image read_image(const std::string& path, bool srgb_to_linear = true);
+// Writes by extension: .exr (32-bit float RGB) or .png (sRGB-encoded, clamped 8-bit). The file is written to a
+// temporary name and renamed, so a failed write never leaves a partial file. Throws Error on failure.
+void write_image(const std::string& path, const Image& image);
+
+float srgb_to_linear(float v);
+float linear_to_srgb(float v);
+
+} // namespace penumbra

@@ -1,0 +1,78 @@
+// Emitter interface: area, point, spot, directional, constant (environment) and envmap lights.
+#pragma once
+#include "scene/interaction.h"
+#include "scene/object.h"
+
+#include <utility>
+
+namespace penumbra {
+
+class Shape;
+struct BoundingSphere {
+    Vec3f center;
+    float radius = 0.f;
+};
+
+enum EmitterFlags : uint32_t {
+    EmitterDeltaPosition = 1u << 0,  // point, spot
+    EmitterDeltaDirection = 1u << 1, // directional
+    EmitterInfinite = 1u << 2,       // constant, envmap, directional
+    EmitterSurface = 1u << 3,        // area
+};
+
+class Emitter : public Object {
+public:
+    ObjectKind kind() const override { return ObjectKind::Emitter; }
+    uint32_t flags() const { return flags_; }
+    bool is_delta() const { return (flags_ & (EmitterDeltaPosition | EmitterDeltaDirection)) != 0; }
+    bool is_infinite() const { return (flags_ & EmitterInfinite) != 0; }
+
+    // Next-event estimation: sample a point of the emitter as seen from `ref`. Returns the sample and the weight
+    // L_e(p -> ref) / pdf (solid angle; for area lights the cosine at the emitter is in the pdf conversion).
+    // Visibility is not tested. A zero weight means the sample failed (e.g. ref behind an area light).
+    virtual std::pair<DirectionSample3f, Color3f> sample_direction(const Interaction3f& ref, const Vec2f& u) const = 0;
+
+    // Light tracing: sample an emitted ray; the weight is L_e * cos / (pdf_position * pdf_direction).
+    virtual std::pair<Ray, Color3f> sample_ray(const Vec2f& u_position, const Vec2f& u_direction) const = 0;
+
+#define PENUMBRA_EMITTER_METHODS(T)                                                                          \
+    /* Solid-angle density of sample_direction() having produced `ds` from `ref` (0 for delta emitters). */  \
+    virtual T pdf_direction(const Interaction<T>& ref, const DirectionSample<T>& ds) const = 0;              \
+    /* Radiance leaving a surface emitter at si toward si.wi (local); zero on the back side. */              \
+    virtual Color3<T> eval(const SurfaceInteraction<T>& si) const = 0;                                       \
+    /* Radiance arriving from an infinite emitter along a ray whose world direction is d (escaped rays). */  \
+    virtual Color3<T> eval_environment(const Vec3<T>& d) const = 0;
+    PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_EMITTER_METHODS)
+#undef PENUMBRA_EMITTER_METHODS
+
+    // Area lights are attached to their shape; infinite lights learn the scene bounds.
+    virtual void set_shape(const Shape* shape) { shape_ = shape; }
+    virtual void set_scene_bounds(const BoundingSphere& bounds) { scene_bounds_ = bounds; }
+    const Shape* shape() const { return shape_; }
+    // Total emitted power estimate (used to report; emitters are selected uniformly as in Mitsuba 3).
+    virtual Color3f power() const { return Color3f(0.f); }
+
+protected:
+    uint32_t flags_ = 0;
+    const Shape* shape_ = nullptr;
+    BoundingSphere scene_bounds_;
+};
+
+// CRTP helper: an emitter implements `pdf_direction_t`, `eval_t` and `eval_environment_t` as templates.
+template <typename Derived> class EmitterBase : public Emitter {
+public:
+#define PENUMBRA_EMITTER_IMPL(T)                                                                             \
+    T pdf_direction(const Interaction<T>& ref, const DirectionSample<T>& ds) const override {                \
+        return static_cast<const Derived*>(this)->template pdf_direction_t<T>(ref, ds);                      \
+    }                                                                                                        \
+    Color3<T> eval(const SurfaceInteraction<T>& si) const override {                                        \
+        return static_cast<const Derived*>(this)->template eval_t<T>(si);                                    \
+    }                                                                                                        \
+    Color3<T> eval_environment(const Vec3<T>& d) const override {                                           \
+        return static_cast<const Derived*>(this)->template eval_environment_t<T>(d);                         \
+    }
+    PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_EMITTER_IMPL)
+#undef PENUMBRA_EMITTER_IMPL
+};
+
+} // namespace penumbra

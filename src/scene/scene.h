@@ -1,0 +1,64 @@
+// The scene: shapes in an Embree BVH, emitters, the sensor and the integrator description.
+#pragma once
+#include "scene/emitter.h"
+#include "scene/medium.h"
+#include "scene/sensor.h"
+#include "scene/shape.h"
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace penumbra {
+
+class Integrator;
+
+class Scene {
+public:
+    Scene();
+    ~Scene();
+    Scene(const Scene&) = delete;
+    Scene& operator=(const Scene&) = delete;
+
+    std::vector<std::shared_ptr<Shape>> shapes;
+    std::vector<std::shared_ptr<Emitter>> emitters; // all emitters, area emitters included
+    std::shared_ptr<Sensor> sensor;
+    std::shared_ptr<Integrator> integrator;
+    // Every object with an `id`, for parameter lookup and `info`.
+    std::map<std::string, std::shared_ptr<Object>> named_objects;
+    std::string source_path;
+
+    // Builds the BVH, emitter bookkeeping and scene bounds. Must be called after the lists are filled.
+    void build();
+
+    SurfaceInteraction3f intersect(const Ray& ray) const;
+    bool occluded(const Ray& ray) const;
+    BoundingSphere bounding_sphere() const { return bounds_; }
+
+    // Uniform emitter selection, then the emitter's own sampling (Mitsuba 3's scheme). The weight includes the
+    // selection probability; when test_visibility is set an occluded sample gets zero weight.
+    std::pair<DirectionSample3f, Color3f> sample_emitter_direction(const Interaction3f& ref, const Vec2f& u,
+                                                                  bool test_visibility) const;
+    float pdf_emitter_direction(const Interaction3f& ref, const DirectionSample3f& ds) const;
+    // Samples an emitter for light tracing; returns the emitter and sets `pdf` to its selection probability.
+    const Emitter* sample_emitter(float& u, float& pdf) const;
+    // Radiance from all infinite emitters along an escaped ray direction.
+    Color3f eval_environment(const Vec3f& d) const;
+
+    size_t triangle_count() const;
+
+private:
+    struct EmbreeState;
+    std::unique_ptr<EmbreeState> embree_;
+    std::vector<const Emitter*> infinite_emitters_;
+    BoundingSphere bounds_;
+};
+
+// Loads a Mitsuba 3 XML scene. `defines` override <default> values (like mitsuba's -D name=value).
+std::unique_ptr<Scene> load_scene(const std::string& path, const std::map<std::string, std::string>& defines = {});
+// Loads a scene from an XML string (relative paths resolve against `base_dir`).
+std::unique_ptr<Scene> load_scene_string(const std::string& xml, const std::string& base_dir = ".",
+                                         const std::map<std::string, std::string>& defines = {});
+
+} // namespace penumbra

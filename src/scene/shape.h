@@ -1,0 +1,52 @@
+// Shapes: a triangle mesh in world space with its material, optional area emitter and media.
+#pragma once
+#include "core/distribution.h"
+#include "scene/bsdf.h"
+#include "scene/emitter.h"
+#include "scene/interaction.h"
+#include "scene/mesh.h"
+
+#include <memory>
+
+namespace penumbra {
+
+class Medium;
+
+class Shape : public Object {
+public:
+    ObjectKind kind() const override { return ObjectKind::Shape; }
+    std::string to_string() const override;
+
+    TriangleMesh mesh; // world space
+    std::shared_ptr<BSDF> bsdf;
+    std::shared_ptr<Emitter> emitter; // area emitter, or null
+    std::shared_ptr<Medium> interior, exterior;
+    bool face_normals = false;        // ignore per-vertex normals
+
+    // Validates the mesh and builds the area distribution. Degenerate (zero-area) triangles are kept in the
+    // mesh but never sampled; `degenerate_count` reports them. A mesh with zero total area is an error.
+    void finalize();
+    float surface_area() const { return total_area_; }
+    size_t degenerate_count() const { return degenerate_count_; }
+
+    // Uniform sampling by area (pdf = 1 / area).
+    PositionSample3f sample_position(const Vec2f& u) const;
+    float pdf_position() const { return 1.f / total_area_; }
+
+    // Geometric normal of a triangle (unit, from the winding order).
+    Vec3f face_normal(uint32_t prim) const;
+    // Fills a surface interaction from a ray hit at distance t in triangle prim with barycentrics (b1, b2).
+    SurfaceInteraction3f compute_surface_interaction(const Ray& ray, float t, uint32_t prim, float b1, float b2) const;
+
+private:
+    DiscreteDistribution area_distribution_;
+    float total_area_ = 0.f;
+    size_t degenerate_count_ = 0;
+};
+
+template <typename T> const BSDF* SurfaceInteraction<T>::bsdf() const { return shape ? shape->bsdf.get() : nullptr; }
+template <typename T> const Emitter* SurfaceInteraction<T>::emitter() const {
+    return shape ? shape->emitter.get() : nullptr;
+}
+
+} // namespace penumbra

@@ -1,0 +1,42 @@
+// Textures: spatially varying parameters evaluated at surface interactions.
+#pragma once
+#include "scene/interaction.h"
+#include "scene/object.h"
+
+#include <memory>
+
+namespace penumbra {
+
+class Texture : public Object {
+public:
+    ObjectKind kind() const override { return ObjectKind::Texture; }
+#define PENUMBRA_TEXTURE_METHODS(T)                                                                          \
+    virtual Color3<T> eval(const SurfaceInteraction<T>& si) const = 0;                                       \
+    /* Single-channel value (mean of the channels; used for alpha, weight, opacity). */                      \
+    virtual T eval_1(const SurfaceInteraction<T>& si) const = 0;
+    PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_TEXTURE_METHODS)
+#undef PENUMBRA_TEXTURE_METHODS
+    // Average value over the texture's domain.
+    virtual Color3f mean() const = 0;
+    virtual bool is_constant() const { return false; }
+};
+
+// CRTP helper: a texture implements `template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>&) const`.
+template <typename Derived> class TextureBase : public Texture {
+public:
+#define PENUMBRA_TEXTURE_IMPL(T)                                                                             \
+    Color3<T> eval(const SurfaceInteraction<T>& si) const override {                                        \
+        return static_cast<const Derived*>(this)->template eval_t<T>(si);                                    \
+    }                                                                                                        \
+    T eval_1(const SurfaceInteraction<T>& si) const override {                                              \
+        const Color3<T> c = eval(si);                                                                        \
+        return (c.x + c.y + c.z) * T(1.f / 3.f);                                                             \
+    }
+    PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_TEXTURE_IMPL)
+#undef PENUMBRA_TEXTURE_IMPL
+};
+
+// A texture with one value everywhere (what rgb/float/spectrum parameters become).
+std::shared_ptr<Texture> make_constant_texture(const Color3f& value);
+
+} // namespace penumbra
