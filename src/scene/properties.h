@@ -14,9 +14,15 @@ namespace penumbra {
 
 class Texture;
 
+// An rgb/spectrum value (distinct from point/vector values, which share the Vec3f type).
+struct ColorValue {
+    Color3f rgb;
+};
+
 class Properties {
 public:
-    using Value = std::variant<double, int64_t, bool, std::string, Color3f, Vec3f, Transform, std::shared_ptr<Object>>;
+    // float, integer, boolean, string, rgb/spectrum (ColorValue), point/vector (Vec3f), transform, nested object.
+    using Value = std::variant<double, int64_t, bool, std::string, ColorValue, Vec3f, Transform, std::shared_ptr<Object>>;
     enum class Tag { Float, Integer, Boolean, String, Color, Vector, Transform, Object };
 
     Properties() = default;

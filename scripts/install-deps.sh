@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Installs penumbra's build dependencies from Debian 12 packages (uses sudo when not run as root).
+set -euo pipefail
+packages=(
+  build-essential cmake pkg-config
+  libembree-dev libtbb-dev libopenexr-dev libpugixml-dev libtinyobjloader-dev libstb-dev
+  libcli11-dev zlib1g-dev libgtest-dev libbenchmark-dev
+)
+if [ "$(id -u)" -eq 0 ]; then sudo=""; else sudo="sudo"; fi
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "installing: ${missing[*]}"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi

@@ -1,0 +1,179 @@
+// Image file I/O: OpenEXR through OpenEXR 3 (linear float data), 8/16-bit and Radiance HDR formats through
+// stb_image, PNG output through stb_image_write. Writes go to `path + ".tmp"` and are renamed into place.
+#include "core/image.h"
+
+#include "core/error.h"
+
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <stb/stb_image.h>
+#include <stb/stb_image_write.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+
+namespace penumbra {
+
+namespace {
+
+std::string lower_extension(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    return ext;
+}
+
+[[noreturn]] void fail(const std::string& what, const std::string& path, const std::string& reason) {
+    throw Error(what + " '" + path + "': " + reason);
+}
+
+// EXR: R,G,B channels (any of half/float/uint, converted to float by the library), or a single Y channel.
+Image read_exr(const std::string& path) {
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imath::Box2i dw = file.header().dataWindow();
+        const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+        const Imf::ChannelList& channels = file.header().channels();
+        const bool rgb = channels.findChannel("R") && channels.findChannel("G") && channels.findChannel("B");
+        const bool gray = !rgb && channels.findChannel("Y");
+        if (!rgb && !gray) {
+            std::string names;
+            for (auto it = channels.begin(); it != channels.end(); ++it)
+                names += std::string(" ") + it.name();
+            fail("read_image", path, "expected R,G,B or Y channels, found:" + names);
+        }
+        Image image(w, h);
+        const size_t xs = sizeof(Color3f), ys = sizeof(Color3f) * size_t(w);
+        char* base = reinterpret_cast<char*>(image.pixels.data());
+        Imf::FrameBuffer fb;
+        if (rgb) {
+            fb.insert("R", Imf::Slice::Make(Imf::FLOAT, base, dw, xs, ys));
+            fb.insert("G", Imf::Slice::Make(Imf::FLOAT, base + sizeof(float), dw, xs, ys));
+            fb.insert("B", Imf::Slice::Make(Imf::FLOAT, base + 2 * sizeof(float), dw, xs, ys));
+        } else {
+            fb.insert("Y", Imf::Slice::Make(Imf::FLOAT, base, dw, xs, ys));
+        }
+        file.setFrameBuffer(fb);
+        file.readPixels(dw.min.y, dw.max.y);
+        if (gray)
+            for (Color3f& c : image.pixels)
+                c = Color3f(c.x);
+        return image;
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        fail("read_image", path, e.what());
+    }
+}
+
+std::string stb_reason() {
+    const char* reason = stbi_failure_reason();
+    return reason ? reason : "unknown stb_image error";
+}
+
+// 8/16-bit formats are sRGB-encoded unless `srgb` is false; Radiance HDR is linear.
+Image read_stb(const std::string& path, bool srgb) {
+    int w = 0, h = 0, n = 0;
+    auto decode = [&](float v) { return srgb ? srgb_to_linear(v) : v; };
+    Image image;
+    if (stbi_is_hdr(path.c_str())) {
+        std::unique_ptr<float, void (*)(void*)> data(stbi_loadf(path.c_str(), &w, &h, &n, 3),
+                                                     stbi_image_free);
+        if (!data) fail("read_image", path, stb_reason());
+        image = Image(w, h);
+        for (size_t i = 0; i < image.pixels.size(); ++i)
+            image.pixels[i] = Color3f(data.get()[3 * i], data.get()[3 * i + 1], data.get()[3 * i + 2]);
+    } else if (stbi_is_16_bit(path.c_str())) {
+        std::unique_ptr<stbi_us, void (*)(void*)> data(stbi_load_16(path.c_str(), &w, &h, &n, 3),
+                                                       stbi_image_free);
+        if (!data) fail("read_image", path, stb_reason());
+        image = Image(w, h);
+        for (size_t i = 0; i < image.pixels.size(); ++i)
+            for (int c = 0; c < 3; ++c)
+                image.pixels[i][c] = decode(data.get()[3 * i + c] / 65535.f);
+    } else {
+        std::unique_ptr<stbi_uc, void (*)(void*)> data(stbi_load(path.c_str(), &w, &h, &n, 3),
+                                                       stbi_image_free);
+        if (!data) fail("read_image", path, stb_reason());
+        // Decode through a 256-entry table: the sRGB curve is the expensive part for large textures.
+        float table[256];
+        for (int v = 0; v < 256; ++v)
+            table[v] = decode(v / 255.f);
+        image = Image(w, h);
+        for (size_t i = 0; i < image.pixels.size(); ++i)
+            for (int c = 0; c < 3; ++c)
+                image.pixels[i][c] = table[data.get()[3 * i + c]];
+    }
+    return image;
+}
+
+void write_exr(const std::string& path, const Image& image) {
+    Imf::Header header(image.width, image.height);
+    header.channels().insert("R", Imf::Channel(Imf::FLOAT));
+    header.channels().insert("G", Imf::Channel(Imf::FLOAT));
+    header.channels().insert("B", Imf::Channel(Imf::FLOAT));
+    const size_t xs = sizeof(Color3f), ys = sizeof(Color3f) * size_t(image.width);
+    char* base = const_cast<char*>(reinterpret_cast<const char*>(image.pixels.data()));
+    Imf::FrameBuffer fb;
+    fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
+    fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
+    fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+    Imf::OutputFile file(path.c_str(), header);
+    file.setFrameBuffer(fb);
+    file.writePixels(image.height);
+}
+
+// PNG: linear values clamped to [0,1], sRGB-encoded, rounded to 8 bits.
+void write_png(const std::string& path, const Image& image) {
+    std::vector<unsigned char> bytes(image.pixels.size() * 3);
+    for (size_t i = 0; i < image.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c) {
+            const float v = linear_to_srgb(std::clamp(image.pixels[i][c], 0.f, 1.f));
+            bytes[3 * i + c] = (unsigned char)(std::lround(v * 255.f));
+        }
+    if (!stbi_write_png(path.c_str(), image.width, image.height, 3, bytes.data(), image.width * 3))
+        throw std::runtime_error("cannot write PNG data");
+}
+
+} // namespace
+
+// IEC 61966-2-1 sRGB transfer function and its inverse.
+float srgb_to_linear(float v) {
+    return v <= 0.04045f ? v * (1.f / 12.92f) : std::pow((v + 0.055f) * (1.f / 1.055f), 2.4f);
+}
+float linear_to_srgb(float v) {
+    return v <= 0.0031308f ? v * 12.92f : 1.055f * std::pow(v, 1.f / 2.4f) - 0.055f;
+}
+
+Image read_image(const std::string& path, bool srgb) {
+    if (!std::filesystem::is_regular_file(path)) fail("read_image", path, "no such file");
+    return lower_extension(path) == ".exr" ? read_exr(path) : read_stb(path, srgb);
+}
+
+void write_image(const std::string& path, const Image& image) {
+    const std::string ext = lower_extension(path);
+    if (ext != ".exr" && ext != ".png")
+        fail("write_image", path, "unsupported extension (expected .exr or .png)");
+    if (image.width <= 0 || image.height <= 0 || image.pixels.size() != size_t(image.width) * image.height)
+        fail("write_image", path, "image has invalid dimensions");
+    const std::string tmp = path + ".tmp";
+    try {
+        if (ext == ".exr")
+            write_exr(tmp, image);
+        else
+            write_png(tmp, image);
+        std::filesystem::rename(tmp, path);
+    } catch (const std::exception& e) {
+        std::error_code ignored;
+        std::filesystem::remove(tmp, ignored);
+        fail("write_image", path, e.what());
+    }
+}
+
+} // namespace penumbra

@@ -1,0 +1,41 @@
+// Integrators turn a scene into images. Camera-driven ones (path, direct, aov) derive from
+// SamplingIntegrator, which owns the parallel, deterministic loop over tiles, pixels and samples.
+#pragma once
+#include "core/image.h"
+#include "core/sampler.h"
+#include "render/render.h"
+#include "scene/factory.h"
+#include "scene/scene.h"
+
+#include <string>
+#include <vector>
+
+namespace penumbra {
+
+// One named output (the main image has an empty name; AOVs are named layers of the EXR).
+struct Layer {
+    std::string name;
+    Image image;
+};
+
+class Integrator : public Object {
+public:
+    ObjectKind kind() const override { return ObjectKind::Integrator; }
+    virtual std::vector<Layer> render(const Scene& scene, const RenderOptions& options, RenderStats& stats) const = 0;
+};
+
+// Counts rays cast by one worker (merged into RenderStats).
+struct RayCounter {
+    uint64_t rays = 0;
+};
+
+class SamplingIntegrator : public Integrator {
+public:
+    std::vector<Layer> render(const Scene& scene, const RenderOptions& options, RenderStats& stats) const override;
+    // Names of the RGB layers sample() writes, in order.
+    virtual std::vector<std::string> layer_names() const { return {""}; }
+    // Estimates the layers' values for one camera ray; writes layer_names().size() colors to `out`.
+    virtual void sample(const Scene& scene, Sampler& sampler, const Ray& ray, Color3f* out, RayCounter& rays) const = 0;
+};
+
+} // namespace penumbra

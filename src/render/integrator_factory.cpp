@@ -1,0 +1,18 @@
+#include "render/aov.h"
+#include "render/direct.h"
+#include "render/path.h"
+#include "render/ptracer.h"
+#include "scene/factory.h"
+
+namespace penumbra {
+
+std::shared_ptr<Object> make_integrator(const Properties& props, const LoadContext&) {
+    const std::string& type = props.plugin();
+    if (type == "path") return std::make_shared<PathIntegrator>(props);
+    if (type == "direct") return std::make_shared<DirectIntegrator>(props);
+    if (type == "ptracer") return std::make_shared<ParticleTracer>(props);
+    if (type == "aov") return std::make_shared<AOVIntegrator>(props);
+    throw_unsupported_plugin(props, ObjectKind::Integrator);
+}
+
+} // namespace penumbra

@@ -1,0 +1,18 @@
+#pragma once
+#include "render/integrator.h"
+
+namespace penumbra {
+
+class ParticleTracer final : public Integrator {
+public:
+    explicit ParticleTracer(const Properties& props);
+    std::vector<Layer> render(const Scene& scene, const RenderOptions& options, RenderStats& stats) const override;
+
+private:
+    // Traces one light path and splats its camera connections into `image`.
+    void trace(const Scene& scene, Sampler& sampler, Image& image, RayCounter& rays) const;
+    int max_depth_ = -1, rr_depth_ = 5;
+    bool hide_emitters_ = false;
+};
+
+} // namespace penumbra

@@ -1,0 +1,63 @@
+// The BSDF plugins: constructors from plain values (used by the factory and by tests) and loaders from
+// scene-file properties (one pair per plugin file, the parameter table at the top of each file).
+#pragma once
+#include "core/microfacet.h"
+#include "scene/bsdf.h"
+#include "scene/factory.h"
+#include "scene/texture.h"
+
+#include <memory>
+
+namespace penumbra {
+
+using TexturePtr = std::shared_ptr<Texture>;
+using BSDFPtr = std::shared_ptr<BSDF>;
+
+// Microfacet roughness as Mitsuba parses it: `distribution`, `alpha` or `alpha_u`/`alpha_v`, `sample_visible`.
+struct RoughnessParams {
+    MicrofacetType type = MicrofacetType::Beckmann;
+    TexturePtr alpha_u, alpha_v;
+    bool sample_visible = true;
+};
+
+BSDFPtr make_diffuse(TexturePtr reflectance);
+BSDFPtr make_conductor(TexturePtr eta, TexturePtr k, TexturePtr specular_reflectance);
+BSDFPtr make_roughconductor(const RoughnessParams& rough, TexturePtr eta, TexturePtr k, TexturePtr specular_reflectance);
+BSDFPtr make_dielectric(float eta, TexturePtr specular_reflectance, TexturePtr specular_transmittance);
+BSDFPtr make_roughdielectric(const RoughnessParams& rough, float eta, TexturePtr specular_reflectance,
+                             TexturePtr specular_transmittance);
+BSDFPtr make_thindielectric(float eta, TexturePtr specular_reflectance, TexturePtr specular_transmittance);
+BSDFPtr make_plastic(float eta, TexturePtr diffuse_reflectance, TexturePtr specular_reflectance, bool nonlinear);
+BSDFPtr make_roughplastic(MicrofacetType type, float alpha, bool sample_visible, float eta,
+                          TexturePtr diffuse_reflectance, TexturePtr specular_reflectance, bool nonlinear);
+BSDFPtr make_blendbsdf(TexturePtr weight, BSDFPtr first, BSDFPtr second);
+BSDFPtr make_twosided(BSDFPtr front, BSDFPtr back); // back may be null (front used on both sides)
+BSDFPtr make_mask(TexturePtr opacity, BSDFPtr nested);
+BSDFPtr make_null_bsdf();
+
+BSDFPtr load_diffuse(const Properties& props);
+BSDFPtr load_conductor(const Properties& props);
+BSDFPtr load_roughconductor(const Properties& props);
+BSDFPtr load_dielectric(const Properties& props);
+BSDFPtr load_roughdielectric(const Properties& props);
+BSDFPtr load_thindielectric(const Properties& props);
+BSDFPtr load_plastic(const Properties& props);
+BSDFPtr load_roughplastic(const Properties& props);
+BSDFPtr load_blendbsdf(const Properties& props);
+BSDFPtr load_twosided(const Properties& props);
+BSDFPtr load_mask(const Properties& props);
+BSDFPtr load_null_bsdf(const Properties& props);
+
+// --- parameter helpers shared by the loaders (factory.cpp) ---
+// Mitsuba's named dielectric IORs ("bk7", "air", ...); a float value is used as is.
+float lookup_ior(const Properties& props, const std::string& name, const std::string& default_name);
+// Relative IOR int_ior / ext_ior with Mitsuba's checks (positive and different).
+float relative_ior(const Properties& props, const std::string& default_int);
+// `distribution`, `alpha` / `alpha_u`, `alpha_v` (textures) and `sample_visible`.
+RoughnessParams parse_roughness(const Properties& props);
+// Conductor `material` (named, e.g. "Au") or explicit `eta` / `k` (defaults 0 / 1: a perfect mirror).
+void parse_conductor_ior(const Properties& props, TexturePtr& eta, TexturePtr& k);
+// Nested BSDF children in declaration order.
+std::vector<BSDFPtr> nested_bsdfs(const Properties& props);
+
+} // namespace penumbra

@@ -1,0 +1,59 @@
+// Smooth dielectric interface: specular reflection with probability F and refraction (Snell's law) with
+// probability 1 - F; refracted radiance is scaled by eta_ti^2 in radiance mode (solid-angle compression).
+//
+// Mitsuba 3 parameters (src/bsdfs/dielectric.cpp):
+//   int_ior                  float|string       "bk7" (1.5046)     interior index of refraction
+//   ext_ior                  float|string       "air" (1.000277)   exterior index of refraction
+//   specular_reflectance     spectrum|texture   1.0                multiplier of the reflected light
+//   specular_transmittance   spectrum|texture   1.0                multiplier of the transmitted light
+#include "core/fresnel.h"
+#include "scene/bsdfs/bsdfs.h"
+
+namespace penumbra {
+
+class DielectricBSDF final : public BSDFBase<DielectricBSDF> {
+public:
+    DielectricBSDF(float eta, TexturePtr reflectance, TexturePtr transmittance)
+        : eta_(eta), reflectance_(std::move(reflectance)), transmittance_(std::move(transmittance)) {
+        flags_ = BSDFDeltaReflection | BSDFDeltaTransmission;
+    }
+    template <typename T> Color3<T> eval_t(const BSDFContext&, const SurfaceInteraction<T>&, const Vec3<T>&) const {
+        return Color3<T>(T(0));
+    }
+    template <typename T> T pdf_t(const BSDFContext&, const SurfaceInteraction<T>&, const Vec3<T>&) const { return T(0); }
+
+    std::pair<BSDFSample, Color3f> sample(const BSDFContext& ctx, const SurfaceInteraction3f& si, float u1,
+                                          const Vec2f&) const override {
+        const auto fr = fresnel_dielectric(si.wi.z, eta_);
+        BSDFSample bs;
+        if (u1 <= fr.F) {
+            bs.wo = Vec3f(-si.wi.x, -si.wi.y, si.wi.z);
+            bs.pdf = fr.F;
+            bs.sampled_type = BSDFDeltaReflection;
+            return {bs, reflectance_->eval(si)};
+        }
+        // wo = -eta_ti wi_tangential + cos_t n (Snell's law).
+        bs.wo = Vec3f(-fr.eta_ti * si.wi.x, -fr.eta_ti * si.wi.y, fr.cos_theta_t);
+        bs.pdf = 1.f - fr.F;
+        bs.eta = fr.eta_it;
+        bs.sampled_type = BSDFDeltaTransmission;
+        const float scale = ctx.mode == TransportMode::Radiance ? fr.eta_ti * fr.eta_ti : 1.f;
+        return {bs, transmittance_->eval(si) * scale};
+    }
+
+private:
+    float eta_;
+    TexturePtr reflectance_, transmittance_;
+};
+
+BSDFPtr make_dielectric(float eta, TexturePtr specular_reflectance, TexturePtr specular_transmittance) {
+    return std::make_shared<DielectricBSDF>(eta, std::move(specular_reflectance), std::move(specular_transmittance));
+}
+
+BSDFPtr load_dielectric(const Properties& props) {
+    const float eta = relative_ior(props, "bk7");
+    return make_dielectric(eta, props.get_texture("specular_reflectance", Color3f(1.f)),
+                           props.get_texture("specular_transmittance", Color3f(1.f)));
+}
+
+} // namespace penumbra

@@ -1,0 +1,58 @@
+// Thin dielectric slab: reflection and straight transmission (wo = -wi) with the interreflections between the
+// two parallel interfaces summed: R' = R + T^2 R / (1 - R^2), T' = 1 - R'.
+//
+// Mitsuba 3 parameters (src/bsdfs/thindielectric.cpp):
+//   int_ior                  float|string       "bk7" (1.5046)     interior index of refraction
+//   ext_ior                  float|string       "air" (1.000277)   exterior index of refraction
+//   specular_reflectance     spectrum|texture   1.0                multiplier of the reflected light
+//   specular_transmittance   spectrum|texture   1.0                multiplier of the transmitted light
+#include "core/fresnel.h"
+#include "scene/bsdfs/bsdfs.h"
+
+namespace penumbra {
+
+class ThinDielectricBSDF final : public BSDFBase<ThinDielectricBSDF> {
+public:
+    ThinDielectricBSDF(float eta, TexturePtr reflectance, TexturePtr transmittance)
+        : eta_(eta), reflectance_(std::move(reflectance)), transmittance_(std::move(transmittance)) {
+        flags_ = BSDFDeltaReflection | BSDFNull;
+    }
+    template <typename T> Color3<T> eval_t(const BSDFContext&, const SurfaceInteraction<T>&, const Vec3<T>&) const {
+        return Color3<T>(T(0));
+    }
+    template <typename T> T pdf_t(const BSDFContext&, const SurfaceInteraction<T>&, const Vec3<T>&) const { return T(0); }
+
+    std::pair<BSDFSample, Color3f> sample(const BSDFContext&, const SurfaceInteraction3f& si, float u1,
+                                          const Vec2f&) const override {
+        float R = fresnel_dielectric(std::abs(si.wi.z), eta_).F;
+        const float T = 1.f - R;
+        if (R < 1.f) R += T * T * R / (1.f - R * R);
+        BSDFSample bs;
+        if (u1 <= R) {
+            bs.wo = Vec3f(-si.wi.x, -si.wi.y, si.wi.z);
+            bs.pdf = R;
+            bs.sampled_type = BSDFDeltaReflection;
+            return {bs, reflectance_->eval(si)};
+        }
+        bs.wo = -si.wi;
+        bs.pdf = 1.f - R;
+        bs.sampled_type = BSDFNull;
+        return {bs, transmittance_->eval(si)};
+    }
+
+private:
+    float eta_;
+    TexturePtr reflectance_, transmittance_;
+};
+
+BSDFPtr make_thindielectric(float eta, TexturePtr specular_reflectance, TexturePtr specular_transmittance) {
+    return std::make_shared<ThinDielectricBSDF>(eta, std::move(specular_reflectance), std::move(specular_transmittance));
+}
+
+BSDFPtr load_thindielectric(const Properties& props) {
+    const float eta = relative_ior(props, "bk7");
+    return make_thindielectric(eta, props.get_texture("specular_reflectance", Color3f(1.f)),
+                               props.get_texture("specular_transmittance", Color3f(1.f)));
+}
+
+} // namespace penumbra

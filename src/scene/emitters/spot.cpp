@@ -1,0 +1,103 @@
+// Spot light (Mitsuba 3 `spot`): a point light emitting along local +z with a linear angular falloff.
+//
+// | name         | type      | default            | meaning                                           |
+// |--------------|-----------|--------------------|---------------------------------------------------|
+// | intensity    | spectrum  | 1                  | radiant intensity at the beam center (W sr^-1)    |
+// | cutoff_angle | float     | 20                 | angle (degrees) beyond which the light is black   |
+// | beam_width   | float     | 3/4 cutoff_angle   | angle (degrees) of the full-intensity beam         |
+// | to_world     | transform | identity           | emitter-to-world transform (light at its origin)  |
+// | texture      | texture   | -                  | projected texture: not supported (LoadError)       |
+#include "core/warp.h"
+#include "scene/emitter.h"
+#include "scene/properties.h"
+
+#include <sstream>
+
+namespace penumbra {
+
+namespace {
+
+class SpotEmitter final : public EmitterBase<SpotEmitter> {
+public:
+    SpotEmitter(const Transform& to_world, const Color3f& intensity, float cutoff_deg, float beam_deg)
+        : to_world_(to_world), position_(to_world.apply_point(Vec3f(0.f))), intensity_(intensity),
+          cutoff_(radians(cutoff_deg)), beam_width_(radians(beam_deg)), cos_cutoff_(std::cos(cutoff_)),
+          cos_beam_width_(std::cos(beam_width_)) {
+        flags_ = EmitterDeltaPosition;
+    }
+
+    // Mitsuba's falloff: 1 inside beam_width, (cutoff - theta) / (cutoff - beam_width) between beam_width and the
+    // cutoff, 0 at and beyond the cutoff. `local` is a direction in the light's frame (not necessarily unit).
+    template <typename T> T falloff(const Vec3<T>& local) const {
+        using std::acos;
+        const T cos_theta = normalize(local).z;
+        if (!(cos_theta > T(cos_cutoff_))) return T(0);
+        if (cos_theta >= T(cos_beam_width_)) return T(1);
+        return (T(cutoff_) - acos(cos_theta)) / T(cutoff_ - beam_width_);
+    }
+
+    // Delta position: weight = I * falloff / dist^2 with discrete pdf 1.
+    std::pair<DirectionSample3f, Color3f> sample_direction(const Interaction3f& ref, const Vec2f&) const override {
+        DirectionSample3f ds;
+        ds.p = position_;
+        ds.n = Vec3f(0.f);
+        ds.pdf = 1.f;
+        ds.delta = true;
+        ds.emitter = this;
+        const Vec3f to_light = position_ - ref.p;
+        ds.dist = norm(to_light);
+        ds.d = to_light / ds.dist;
+        const float f = falloff(to_world_.inverse().apply_vector(-ds.d));
+        return {ds, intensity_ * (f / (ds.dist * ds.dist))};
+    }
+
+    // Uniform direction in the cutoff cone: weight = I * falloff / pdf_cone.
+    std::pair<Ray, Color3f> sample_ray(const Vec2f&, const Vec2f& u_direction) const override {
+        const Vec3f local = warp::square_to_uniform_cone(u_direction, cos_cutoff_);
+        const Vec3f d = normalize(to_world_.apply_vector(local));
+        return {Ray(position_, d), intensity_ * (falloff(local) / warp::square_to_uniform_cone_pdf(cos_cutoff_))};
+    }
+
+    template <typename T> T pdf_direction_t(const Interaction<T>&, const DirectionSample<T>&) const { return T(0); }
+    template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>&) const { return Color3<T>(T(0)); }
+    template <typename T> Color3<T> eval_environment_t(const Vec3<T>&) const { return Color3<T>(T(0)); }
+
+    // Phi = 2 pi I int_0^cutoff falloff(theta) sin(theta) dtheta
+    //     = 2 pi I [1 + (sin(beam) - sin(cutoff)) / (cutoff - beam)]   (1 - cos(cutoff) when beam = cutoff).
+    Color3f power() const override {
+        const float width = cutoff_ - beam_width_;
+        const float integral = width > 0.f ? 1.f + (std::sin(beam_width_) - std::sin(cutoff_)) / width : 1.f - cos_cutoff_;
+        return intensity_ * (2.f * Pi * integral);
+    }
+
+    std::string to_string() const override {
+        std::ostringstream os;
+        os << "SpotEmitter[position = " << position_ << ", intensity = " << intensity_
+           << ", cutoff_angle = " << degrees(cutoff_) << ", beam_width = " << degrees(beam_width_) << "]";
+        return os.str();
+    }
+
+private:
+    Transform to_world_;
+    Vec3f position_;
+    Color3f intensity_;
+    float cutoff_, beam_width_, cos_cutoff_, cos_beam_width_;
+};
+
+} // namespace
+
+std::shared_ptr<Emitter> make_spot_emitter(const Properties& props) {
+    if (props.has("texture"))
+        props.raise("texture", "unsupported parameter 'texture': projection textures on spot lights are not supported");
+    const Color3f intensity = props.get_color("intensity", Color3f(1.f));
+    if (!is_finite(intensity) || intensity.x < 0.f || intensity.y < 0.f || intensity.z < 0.f)
+        props.raise("intensity", "'intensity' must be finite and non-negative");
+    const float cutoff = props.get_float("cutoff_angle", 20.f);
+    const float beam = props.get_float("beam_width", cutoff * 0.75f);
+    if (!(cutoff > 0.f) || !(cutoff <= 180.f)) props.raise("cutoff_angle", "'cutoff_angle' must be in (0, 180] degrees");
+    if (!(beam >= 0.f) || !(beam <= cutoff))
+        props.raise("beam_width", "'beam_width' must be in [0, cutoff_angle] degrees");
+    return std::make_shared<SpotEmitter>(props.get_transform("to_world"), intensity, cutoff, beam);
+}
+
+} // namespace penumbra

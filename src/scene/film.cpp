@@ -1,0 +1,164 @@
+// Film (`hdrfilm`) and reconstruction filters (`box`, `tent`, `gaussian`) with Mitsuba 3's parameters.
+//
+// hdrfilm:
+//   width, height     integer  768, 576
+//   file_format       string   openexr   (only OpenEXR output)
+//   pixel_format      string   rgb       rgb | rgba (penumbra writes RGB either way)
+//   component_format  string   float16   float16 | float32 | uint32 (penumbra writes float32)
+//   sample_border     boolean  false     (true is not supported)
+//   crop_offset_x/y, crop_width/height   (only the full frame is supported)
+//   rfilter           nested   gaussian
+// box:      radius 0.5 (fixed)                       f(x) = 1 for |x| <= 1/2
+// tent:     radius float 1                           f(x) = max(0, 1 - |x| / radius)
+// gaussian: stddev float 0.5, radius = 4 stddev      f(x) = max(0, exp(-x^2 / (2 stddev^2)) - exp(-radius^2 /
+// (2 stddev^2)))
+#include "scene/film.h"
+
+#include "scene/factory.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace penumbra {
+
+// Bins of the tabulated 1D CDF used by sample(); the profile is piecewise constant on them.
+static constexpr int FilterTableSize = 1024;
+
+float ReconstructionFilter::eval_normalized(const Vec2f& offset) const {
+    return eval(offset.x) * eval(offset.y) / (integral_ * integral_);
+}
+
+// Midpoint-rule tabulation of the profile on [-r, r]; the CDF is normalized so that cdf_.back() == 1.
+void ReconstructionFilter::init_sampling() {
+    cdf_.assign(FilterTableSize + 1, 0.f);
+    const double h = 2.0 * radius_ / FilterTableSize;
+    double sum = 0.0;
+    for (int i = 0; i < FilterTableSize; ++i) {
+        sum += std::max(0.f, eval(float(-radius_ + (i + 0.5) * h)));
+        cdf_[i + 1] = float(sum);
+    }
+    for (float& c : cdf_)
+        c = float(c / sum);
+    cdf_.back() = 1.f;
+    integral_ = float(sum * h);
+}
+
+// Inverts the piecewise-linear CDF independently along x and y (the filter is separable).
+Vec2f ReconstructionFilter::sample(const Vec2f& u) const {
+    auto invert = [&](float ui) {
+        const auto it = std::upper_bound(cdf_.begin() + 1, cdf_.end() - 1, ui);
+        const int i = int(it - cdf_.begin()) - 1;
+        const float width = cdf_[i + 1] - cdf_[i];
+        const float t = width > 0.f ? (ui - cdf_[i]) / width : 0.5f;
+        return -radius_ + (float(i) + std::clamp(t, 0.f, 1.f)) * (2.f * radius_ / FilterTableSize);
+    };
+    return {invert(u.x), invert(u.y)};
+}
+
+std::string Film::to_string() const {
+    std::ostringstream os;
+    os << "HDRFilm[" << width << "x" << height << ", rfilter=" << (rfilter ? rfilter->to_string() : "none")
+       << "]";
+    return os.str();
+}
+
+namespace {
+
+class BoxFilter final : public ReconstructionFilter {
+  public:
+    BoxFilter() {
+        radius_ = 0.5f;
+        init_sampling();
+    }
+    float eval(float x) const override { return std::abs(x) <= radius_ ? 1.f : 0.f; }
+};
+
+class TentFilter final : public ReconstructionFilter {
+  public:
+    explicit TentFilter(float radius) {
+        radius_ = radius;
+        init_sampling();
+    }
+    float eval(float x) const override { return std::max(0.f, 1.f - std::abs(x) / radius_); }
+};
+
+class GaussianFilter final : public ReconstructionFilter {
+  public:
+    explicit GaussianFilter(float stddev) : alpha_(-1.f / (2.f * stddev * stddev)) {
+        radius_ = 4.f * stddev;
+        bias_ = std::exp(alpha_ * radius_ * radius_);
+        init_sampling();
+    }
+    float eval(float x) const override { return std::max(0.f, std::exp(alpha_ * x * x) - bias_); }
+
+  private:
+    float alpha_, bias_ = 0.f;
+};
+
+} // namespace
+
+std::shared_ptr<Object> make_rfilter(const Properties& props, const LoadContext&) {
+    const std::string& type = props.plugin();
+    if (type == "box") return std::make_shared<BoxFilter>();
+    if (type == "tent") {
+        const float radius = props.get_float("radius", 1.f);
+        if (!(radius > 0.f)) props.raise("radius", "radius must be positive");
+        return std::make_shared<TentFilter>(radius);
+    }
+    if (type == "gaussian") {
+        const float stddev = props.get_float("stddev", 0.5f);
+        if (!(stddev > 0.f)) props.raise("stddev", "stddev must be positive");
+        return std::make_shared<GaussianFilter>(stddev);
+    }
+    throw_unsupported_plugin(props, ObjectKind::RFilter);
+}
+
+std::shared_ptr<Object> make_film(const Properties& props, const LoadContext& ctx) {
+    if (props.plugin() != "hdrfilm") throw_unsupported_plugin(props, ObjectKind::Film);
+    auto film = std::make_shared<Film>();
+    film->width = int(props.get_int("width", 768));
+    film->height = int(props.get_int("height", 576));
+    if (film->width <= 0) props.raise("width", "width must be positive");
+    if (film->height <= 0) props.raise("height", "height must be positive");
+
+    auto check_choice = [&](const char* name, const char* def, std::initializer_list<const char*> allowed) {
+        const std::string value = props.get_string(name, def);
+        std::string list;
+        for (const char* a : allowed) {
+            if (value == a) return;
+            list += std::string(list.empty() ? "'" : ", '") + a + "'";
+        }
+        props.raise(name, std::string("invalid ") + name + " '" + value + "' (expected " + list + ")");
+    };
+    check_choice("file_format", "openexr", {"openexr", "exr"});
+    check_choice("pixel_format", "rgb", {"rgb", "rgba"});
+    check_choice("component_format", "float16", {"float16", "float32", "uint32"});
+    if (props.get_bool("sample_border", false))
+        props.raise("sample_border", "sample_border=true is not supported");
+    const bool full_frame = props.get_int("crop_offset_x", 0) == 0 &&
+                            props.get_int("crop_offset_y", 0) == 0 &&
+                            props.get_int("crop_width", film->width) == film->width &&
+                            props.get_int("crop_height", film->height) == film->height;
+    if (!full_frame) {
+        const char* name = props.has("crop_offset_x")   ? "crop_offset_x"
+                           : props.has("crop_offset_y") ? "crop_offset_y"
+                           : props.has("crop_width")    ? "crop_width"
+                                                        : "crop_height";
+        props.raise(name, "crop windows are not supported (only the full frame can be rendered)");
+    }
+
+    const auto filters = props.objects(ObjectKind::RFilter);
+    if (filters.size() > 1) throw LoadError(filters[1]->location, "hdrfilm: more than one rfilter given");
+    if (filters.empty()) {
+        film->rfilter = std::static_pointer_cast<ReconstructionFilter>(
+            make_rfilter(Properties("gaussian", props.location()), ctx));
+        film->rfilter->plugin = "gaussian";
+        film->rfilter->location = props.location();
+    } else {
+        film->rfilter = std::static_pointer_cast<ReconstructionFilter>(filters[0]);
+    }
+    return film;
+}
+
+} // namespace penumbra

@@ -1,0 +1,150 @@
+// make_shape: Mitsuba 3 shape plugins, all turned into world-space triangle meshes.
+//
+//  plugin      parameter        type       default
+//  obj         filename         string     (required)
+//              face_normals     bool       false
+//              flip_tex_coords  bool       true    (uv.y = 1 - uv.y)
+//  ply         filename         string     (required)
+//              face_normals     bool       false
+//  serialized  filename         string     (required)
+//              shape_index      int        0
+//              face_normals     bool       false
+//  cube        face_normals     bool       false
+//  sphere      center           point      (0, 0, 0)
+//              radius           float      1
+//  all         to_world         transform  identity
+//              flip_normals     bool       false
+//              nested bsdf (at most one; default: diffuse), area emitter (at most one),
+//              interior / exterior medium
+//
+// Loaded meshes without vertex normals get smooth ones (Mitsuba 3 recomputes them unless face_normals is
+// set). Primitives are tessellated: the sphere as 64 x 128 (theta x phi) quads, the disk as a 256-triangle
+// fan.
+#include "scene/factory.h"
+#include "scene/medium.h"
+#include "scene/shape.h"
+
+#include <cmath>
+
+namespace penumbra {
+namespace {
+
+constexpr int SphereRings = 64, SphereSegments = 128, DiskSegments = 256;
+
+// Angle between unit vectors, stable for small and large angles: 2 asin(|a - b| / 2).
+float unit_angle(const Vec3f& a, const Vec3f& b) {
+    return dot(a, b) < 0.f ? Pi - 2.f * std::asin(0.5f * norm(a + b)) : 2.f * std::asin(0.5f * norm(a - b));
+}
+
+// Vertex normals as the angle-weighted sum of incident face normals (Thuermer & Wuethrich 1998, as Mitsuba
+// 3). Vertices touched only by degenerate faces keep a zero normal (shading then uses the face normal).
+void recompute_vertex_normals(TriangleMesh& mesh) {
+    mesh.normals.assign(mesh.vertex_count(), Vec3f(0.f));
+    for (size_t f = 0; f < mesh.face_count(); ++f) {
+        const uint32_t* i = &mesh.indices[3 * f];
+        const Vec3f p[3] = {mesh.positions[i[0]], mesh.positions[i[1]], mesh.positions[i[2]]};
+        const Vec3f n = cross(p[1] - p[0], p[2] - p[0]);
+        const float length = norm(n);
+        if (!(length > 0.f)) continue;
+        for (int k = 0; k < 3; ++k) {
+            const Vec3f e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
+            const float l1 = norm(e1), l2 = norm(e2);
+            if (l1 > 0.f && l2 > 0.f) mesh.normals[i[k]] += n * (unit_angle(e1 / l1, e2 / l2) / length);
+        }
+    }
+    for (Vec3f& n : mesh.normals) {
+        const float length = norm(n);
+        if (length > 0.f) n /= length;
+    }
+}
+
+// flip_normals: reversed winding flips the geometric normal; vertex normals are negated to match.
+void flip_orientation(TriangleMesh& mesh) {
+    for (size_t f = 0; f < mesh.face_count(); ++f)
+        std::swap(mesh.indices[3 * f + 1], mesh.indices[3 * f + 2]);
+    for (Vec3f& n : mesh.normals)
+        n = -n;
+}
+
+TriangleMesh load_mesh_file(const Properties& props, const LoadContext& ctx) {
+    const std::string path = ctx.resolve(props.get_string("filename"), props.location("filename"));
+    const std::string& type = props.plugin();
+    try {
+        if (type == "obj") {
+            TriangleMesh mesh = load_obj(path);
+            if (props.get_bool("flip_tex_coords", true))
+                for (Vec2f& uv : mesh.uvs)
+                    uv.y = 1.f - uv.y;
+            return mesh;
+        }
+        if (type == "ply") return load_ply(path);
+        const int64_t index = props.get_int("shape_index", 0);
+        if (index < 0 || index > INT32_MAX) props.raise("shape_index", "must be a non-negative integer");
+        return load_serialized(path, int(index));
+    } catch (const LoadError&) {
+        throw;
+    } catch (const Error& e) {
+        throw LoadError(props.location("filename"), e.what());
+    }
+}
+
+template <typename T>
+std::shared_ptr<T> at_most_one(const Properties& props, ObjectKind kind, const char* what) {
+    const auto objects = props.objects(kind);
+    if (objects.size() > 1)
+        throw LoadError(objects[1]->location, "shape '" + props.plugin() + "' has more than one " + what);
+    return objects.empty() ? nullptr : std::dynamic_pointer_cast<T>(objects[0]);
+}
+
+} // namespace
+
+std::shared_ptr<Object> make_shape(const Properties& props, const LoadContext& ctx) {
+    const std::string& type = props.plugin();
+    const bool from_file = type == "obj" || type == "ply" || type == "serialized";
+    if (!from_file && type != "rectangle" && type != "cube" && type != "disk" && type != "sphere")
+        throw_unsupported_plugin(props, ObjectKind::Shape);
+
+    auto shape = std::make_shared<Shape>();
+    shape->plugin = type; // set early: finalize() names the shape in its errors
+    shape->location = props.location();
+    if (from_file) {
+        shape->mesh = load_mesh_file(props, ctx);
+    } else if (type == "rectangle") {
+        shape->mesh = make_rectangle_mesh();
+    } else if (type == "cube") {
+        shape->mesh = make_cube_mesh();
+    } else if (type == "disk") {
+        shape->mesh = make_disk_mesh(DiskSegments);
+    } else {
+        const float radius = props.get_float("radius", 1.f);
+        if (!(radius > 0.f) || !std::isfinite(radius)) props.raise("radius", "must be positive");
+        shape->mesh =
+            make_sphere_mesh(props.get_vector("center", Vec3f(0.f)), radius, SphereRings, SphereSegments);
+    }
+    if (from_file || type == "cube") shape->face_normals = props.get_bool("face_normals", false);
+    const bool flip_normals = props.get_bool("flip_normals", false);
+
+    shape->mesh.apply_transform(props.get_transform("to_world"));
+    if (shape->face_normals)
+        shape->mesh.normals.clear();
+    else if (from_file && shape->mesh.normals.empty())
+        recompute_vertex_normals(shape->mesh);
+    if (flip_normals) flip_orientation(shape->mesh);
+
+    shape->bsdf = at_most_one<BSDF>(props, ObjectKind::BSDF, "BSDF");
+    if (!shape->bsdf)
+        shape->bsdf =
+            std::dynamic_pointer_cast<BSDF>(make_bsdf(Properties("diffuse", props.location()), ctx));
+    shape->emitter = at_most_one<Emitter>(props, ObjectKind::Emitter, "emitter");
+    if (shape->emitter && !(shape->emitter->flags() & EmitterSurface))
+        throw LoadError(shape->emitter->location,
+                        "a shape can only carry an area emitter, not '" + shape->emitter->plugin + "'");
+    shape->interior = std::dynamic_pointer_cast<Medium>(props.get_object("interior", ObjectKind::Medium));
+    shape->exterior = std::dynamic_pointer_cast<Medium>(props.get_object("exterior", ObjectKind::Medium));
+
+    shape->finalize();
+    if (shape->emitter) shape->emitter->set_shape(shape.get());
+    return shape;
+}
+
+} // namespace penumbra

@@ -1,0 +1,127 @@
+// Mitsuba 3 `bitmap` texture.
+//
+// Parameters:
+//   filename     string     (required)  EXR (linear), PNG/JPEG/BMP/TGA (sRGB unless raw), HDR (linear)
+//   filter_type  string     bilinear    bilinear | nearest
+//   wrap_mode    string     repeat      repeat | mirror | clamp
+//   raw          boolean    false       true: keep 8-bit values as stored (no sRGB -> linear decoding)
+//   to_uv        transform  none        affine map applied to the uv coordinates first
+//
+// Uv convention (as Mitsuba): (u, v) = (0, 0) is the top-left corner of the image, u to the right, v down;
+// texel (i, j) covers [i, i+1]/W x [j, j+1]/H. Mitsuba's mesh loaders flip v (v = 1 - v_obj) so that OBJ uvs,
+// whose v points up, address the image the usual way.
+#include "core/image.h"
+#include "scene/factory.h"
+#include "scene/texture.h"
+
+#include <array>
+#include <cmath>
+
+namespace penumbra {
+
+std::array<float, 6> uv_affine(const Transform& to_uv); // textures/factory.cpp
+
+namespace {
+
+enum class WrapMode { Repeat, Mirror, Clamp };
+
+class BitmapTexture final : public TextureBase<BitmapTexture> {
+  public:
+    BitmapTexture(Image image, bool bilinear, WrapMode wrap, const std::array<float, 6>& to_uv,
+                  std::string name)
+        : image_(std::move(image)), bilinear_(bilinear), wrap_(wrap), to_uv_(to_uv), name_(std::move(name)) {
+        Vec3d sum(0.0);
+        for (const Color3f& c : image_.pixels)
+            sum += Vec3d(c);
+        mean_ = Color3f(sum / double(image_.pixels.size()));
+    }
+
+    // Bilinear: f(u W - 1/2, v H - 1/2) interpolated between the four nearest texel centers; nearest: the
+    // texel containing (u W, v H). Texel values are constants; derivatives flow through the interpolation
+    // weights.
+    template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>& si) const {
+        const T u = si.uv.x * to_uv_[0] + si.uv.y * to_uv_[1] + T(to_uv_[2]);
+        const T v = si.uv.x * to_uv_[3] + si.uv.y * to_uv_[4] + T(to_uv_[5]);
+        const int w = image_.width, h = image_.height;
+        if (!bilinear_) {
+            const int x = wrap(int(std::floor(detach(u) * float(w))), w);
+            const int y = wrap(int(std::floor(detach(v) * float(h))), h);
+            return Color3<T>(image_.at(x, y));
+        }
+        const T px = u * float(w) - T(0.5f), py = v * float(h) - T(0.5f);
+        const int x0 = int(std::floor(detach(px))), y0 = int(std::floor(detach(py)));
+        const T wx = px - T(float(x0)), wy = py - T(float(y0));
+        const int xa = wrap(x0, w), xb = wrap(x0 + 1, w), ya = wrap(y0, h), yb = wrap(y0 + 1, h);
+        const Color3<T> top =
+            Color3<T>(image_.at(xa, ya)) * (T(1.f) - wx) + Color3<T>(image_.at(xb, ya)) * wx;
+        const Color3<T> bottom =
+            Color3<T>(image_.at(xa, yb)) * (T(1.f) - wx) + Color3<T>(image_.at(xb, yb)) * wx;
+        return top * (T(1.f) - wy) + bottom * wy;
+    }
+
+    Color3f mean() const override { return mean_; }
+    std::string to_string() const override {
+        return "BitmapTexture[" + name_ + ", " + std::to_string(image_.width) + "x" +
+               std::to_string(image_.height) + "]";
+    }
+
+  private:
+    // Maps an integer texel index into [0, n) according to the wrap mode (mirror has period 2n: ... 1 0 | 0 1
+    // ...).
+    int wrap(int i, int n) const {
+        switch (wrap_) {
+        case WrapMode::Clamp:
+            return std::clamp(i, 0, n - 1);
+        case WrapMode::Repeat:
+            return ((i % n) + n) % n;
+        case WrapMode::Mirror: {
+            const int p = ((i % (2 * n)) + 2 * n) % (2 * n);
+            return p < n ? p : 2 * n - 1 - p;
+        }
+        }
+        return i;
+    }
+
+    Image image_;
+    bool bilinear_;
+    WrapMode wrap_;
+    std::array<float, 6> to_uv_;
+    std::string name_;
+    Color3f mean_;
+};
+
+} // namespace
+
+std::shared_ptr<Texture> make_bitmap_texture(const Properties& props, const LoadContext& ctx) {
+    const std::string filename = props.get_string("filename");
+    const std::string path = ctx.resolve(filename, props.location("filename"));
+
+    const std::string filter = props.get_string("filter_type", "bilinear");
+    if (filter != "bilinear" && filter != "nearest")
+        props.raise("filter_type", "invalid filter_type '" + filter + "' (expected 'bilinear' or 'nearest')");
+
+    const std::string wrap_name = props.get_string("wrap_mode", "repeat");
+    WrapMode wrap;
+    if (wrap_name == "repeat")
+        wrap = WrapMode::Repeat;
+    else if (wrap_name == "mirror")
+        wrap = WrapMode::Mirror;
+    else if (wrap_name == "clamp")
+        wrap = WrapMode::Clamp;
+    else
+        props.raise("wrap_mode",
+                    "invalid wrap_mode '" + wrap_name + "' (expected 'repeat', 'mirror' or 'clamp')");
+
+    const bool raw = props.get_bool("raw", false);
+    const auto to_uv = uv_affine(props.get_transform("to_uv"));
+    Image image;
+    try {
+        image = read_image(path, !raw);
+    } catch (const Error& e) {
+        throw LoadError(props.location("filename"), e.what());
+    }
+    if (image.pixels.empty()) props.raise("filename", "image '" + path + "' is empty");
+    return std::make_shared<BitmapTexture>(std::move(image), filter == "bilinear", wrap, to_uv, filename);
+}
+
+} // namespace penumbra

@@ -1,0 +1,43 @@
+// Constant texture: what rgb/spectrum/float parameters become, and Mitsuba's `srgb` / `uniform` texture
+// plugins.
+//
+// Mitsuba parameters (via make_texture):
+//   srgb:    color  rgb    (required)
+//   uniform: value  float  (required)
+#include "scene/factory.h"
+#include "scene/texture.h"
+
+namespace penumbra {
+
+namespace {
+
+class ConstantTexture final : public TextureBase<ConstantTexture> {
+  public:
+    explicit ConstantTexture(const Color3f& value) : value_(value) {}
+    template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>&) const { return Color3<T>(value_); }
+    Color3f mean() const override { return value_; }
+    bool is_constant() const override { return true; }
+    std::string to_string() const override {
+        return "ConstantTexture[" + std::to_string(value_.x) + ", " + std::to_string(value_.y) + ", " +
+               std::to_string(value_.z) + "]";
+    }
+
+  private:
+    Color3f value_;
+};
+
+} // namespace
+
+std::shared_ptr<Texture> make_constant_texture(const Color3f& value) {
+    return std::make_shared<ConstantTexture>(value);
+}
+
+std::shared_ptr<Texture> make_srgb_texture(const Properties& props) {
+    return make_constant_texture(props.get_color("color"));
+}
+
+std::shared_ptr<Texture> make_uniform_texture(const Properties& props) {
+    return make_constant_texture(Color3f(props.get_float("value")));
+}
+
+} // namespace penumbra

@@ -1,0 +1,58 @@
+// Monte Carlo statistics over independent renders (different seeds): per-pixel means and standard errors,
+// and the standard error of the image mean. Every render-based tolerance in the tests derives from these.
+#pragma once
+#include "render/render.h"
+
+#include <cmath>
+#include <vector>
+
+namespace penumbra::test {
+
+struct BatchStats {
+    Image mean, stderr_img;       // per pixel (per channel)
+    double image_mean = 0.0;      // mean over pixels and channels
+    double image_mean_stderr = 0.0;
+};
+
+inline BatchStats render_batches(const Scene& scene, int batches, int spp, uint64_t seed0 = 1) {
+    std::vector<Image> images;
+    for (int b = 0; b < batches; ++b) {
+        RenderOptions opt;
+        opt.spp = spp;
+        opt.seed = seed0 + uint64_t(b) * 7919;
+        images.push_back(render(scene, opt));
+    }
+    const int w = images[0].width, h = images[0].height;
+    BatchStats s{Image(w, h), Image(w, h)};
+    std::vector<double> means;
+    for (const Image& im : images) {
+        double m = 0;
+        for (const auto& p : im.pixels) m += p.x + p.y + p.z;
+        means.push_back(m / (3.0 * im.pixels.size()));
+    }
+    for (size_t i = 0; i < s.mean.pixels.size(); ++i) {
+        Vec3d sum(0.0), sum2(0.0);
+        for (const Image& im : images) {
+            const Vec3d v(im.pixels[i]);
+            sum += v;
+            sum2 += v * v;
+        }
+        const Vec3d mean = sum / double(batches);
+        const Vec3d var = (sum2 / double(batches) - mean * mean) * (double(batches) / (batches - 1));
+        s.mean.pixels[i] = Color3f(mean);
+        s.stderr_img.pixels[i] = Color3f(float(std::sqrt(std::max(0.0, var.x) / batches)),
+                                         float(std::sqrt(std::max(0.0, var.y) / batches)),
+                                         float(std::sqrt(std::max(0.0, var.z) / batches)));
+    }
+    double m = 0, m2 = 0;
+    for (double v : means) {
+        m += v;
+        m2 += v * v;
+    }
+    m /= batches;
+    s.image_mean = m;
+    s.image_mean_stderr = std::sqrt(std::max(0.0, (m2 / batches - m * m) * batches / (batches - 1)) / batches);
+    return s;
+}
+
+} // namespace penumbra::test

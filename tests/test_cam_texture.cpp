@@ -1,0 +1,175 @@
+// Textures: bitmap lookups (uv convention, filters, wrap modes, sRGB), checkerboard pattern, constant.
+#include "core/image.h"
+#include "scene/factory.h"
+#include "scene/texture.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <unistd.h>
+
+using namespace penumbra;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct TextureFixture : ::testing::Test {
+    fs::path dir = fs::temp_directory_path() / ("penumbra_cam_texture_" + std::to_string(::getpid()));
+    LoadContext ctx;
+    Image img{4, 2};
+
+    void SetUp() override {
+        fs::create_directories(dir);
+        ctx.search_paths = {dir.string()};
+        // Pixel (x, y) holds (x, y, 10 + x + 4 y): every texel is distinct and identifies its position.
+        for (int y = 0; y < 2; ++y)
+            for (int x = 0; x < 4; ++x)
+                img.at(x, y) = Color3f(float(x), float(y), 10.f + x + 4.f * y);
+        write_image((dir / "grid.exr").string(), img);
+    }
+    void TearDown() override { fs::remove_all(dir); }
+
+    std::shared_ptr<Texture> bitmap(const std::string& file, const std::string& filter = "",
+                                    const std::string& wrap = "", bool raw = false,
+                                    const Transform* to_uv = nullptr) {
+        const SourceLocation loc{"scene.xml", 7};
+        Properties props("bitmap", loc);
+        props.set("filename", file, loc);
+        if (!filter.empty()) props.set("filter_type", filter, loc);
+        if (!wrap.empty()) props.set("wrap_mode", wrap, loc);
+        if (raw) props.set("raw", true, loc);
+        if (to_uv) props.set("to_uv", *to_uv, loc);
+        auto obj = make_texture(props, ctx);
+        EXPECT_TRUE(props.unqueried().empty());
+        return std::static_pointer_cast<Texture>(obj);
+    }
+};
+
+Color3f at_uv(const Texture& tex, float u, float v) {
+    SurfaceInteraction3f si;
+    si.uv = Vec2f(u, v);
+    return tex.eval(si);
+}
+
+void expect_near(const Color3f& a, const Color3f& b, float tol) {
+    for (int i = 0; i < 3; ++i)
+        EXPECT_NEAR(a[i], b[i], tol) << a << " vs " << b;
+}
+
+// Interpolation of exactly stored float texels: only single-precision roundoff (values <= 20, ~1e-6
+// relative).
+constexpr float Tol = 1e-5f;
+
+} // namespace
+
+TEST_F(TextureFixture, NearestUsesTopLeftOrigin) {
+    auto tex = bitmap("grid.exr", "nearest");
+    // uv (0,0) is the top-left corner; v grows downward through the image rows (Mitsuba's convention).
+    EXPECT_EQ(at_uv(*tex, 0.1f, 0.1f), img.at(0, 0));
+    EXPECT_EQ(at_uv(*tex, 0.9f, 0.9f), img.at(3, 1));
+    EXPECT_EQ(at_uv(*tex, 0.3f, 0.7f), img.at(1, 1));
+}
+
+TEST_F(TextureFixture, BilinearInterpolatesBetweenTexelCenters) {
+    auto tex = bitmap("grid.exr");
+    // At a texel center the value is the texel itself.
+    expect_near(at_uv(*tex, 2.5f / 4.f, 0.5f / 2.f), img.at(2, 0), Tol);
+    // Half way between the centers of (1,0), (2,0), (1,1), (2,1): the average of the four.
+    const Color3f avg = (img.at(1, 0) + img.at(2, 0) + img.at(1, 1) + img.at(2, 1)) * 0.25f;
+    expect_near(at_uv(*tex, 0.5f, 0.5f), avg, Tol);
+    // A quarter of the way from center (0,0) to center (1,0).
+    expect_near(at_uv(*tex, 0.75f / 4.f, 0.25f), img.at(0, 0) * 0.75f + img.at(1, 0) * 0.25f, Tol);
+}
+
+TEST_F(TextureFixture, WrapModes) {
+    auto repeat = bitmap("grid.exr", "nearest", "repeat");
+    auto mirror = bitmap("grid.exr", "nearest", "mirror");
+    auto clamp = bitmap("grid.exr", "nearest", "clamp");
+    // u = -0.3 -> texel column floor(-1.2) = -2: repeat -> 2, mirror -> 1, clamp -> 0.
+    EXPECT_EQ(at_uv(*repeat, -0.3f, 0.25f), img.at(2, 0));
+    EXPECT_EQ(at_uv(*mirror, -0.3f, 0.25f), img.at(1, 0));
+    EXPECT_EQ(at_uv(*clamp, -0.3f, 0.25f), img.at(0, 0));
+    // v = 1.3 -> row floor(2.6) = 2: repeat -> 0, mirror -> 1, clamp -> 1.
+    EXPECT_EQ(at_uv(*repeat, 0.1f, 1.3f), img.at(0, 0));
+    EXPECT_EQ(at_uv(*mirror, 0.1f, 1.3f), img.at(0, 1));
+    EXPECT_EQ(at_uv(*clamp, 0.1f, 1.3f), img.at(0, 1));
+    // Bilinear at the left edge (u = 0) blends column 0 with column -1: 3 under repeat, 0 under clamp/mirror.
+    auto bil_repeat = bitmap("grid.exr", "bilinear", "repeat");
+    auto bil_clamp = bitmap("grid.exr", "bilinear", "clamp");
+    expect_near(at_uv(*bil_repeat, 0.f, 0.25f), (img.at(0, 0) + img.at(3, 0)) * 0.5f, Tol);
+    expect_near(at_uv(*bil_clamp, 0.f, 0.25f), img.at(0, 0), Tol);
+}
+
+TEST_F(TextureFixture, ToUvAndMean) {
+    const Transform to_uv =
+        Transform::translate(Vec3f(0.25f, 0.f, 0.f)) * Transform::scale(Vec3f(0.5f, 1.f, 1.f));
+    auto tex = bitmap("grid.exr", "nearest", "", false, &to_uv);
+    // u' = 0.5 u + 0.25: u = 0.9 -> 0.7 -> column 2.
+    EXPECT_EQ(at_uv(*tex, 0.9f, 0.25f), img.at(2, 0));
+    expect_near(tex->mean(), Color3f(1.5f, 0.5f, 13.5f), Tol);
+    EXPECT_FALSE(tex->is_constant());
+}
+
+TEST_F(TextureFixture, EightBitFilesAreSrgbDecodedUnlessRaw) {
+    Image png(2, 1);
+    png.at(0, 0) = Color3f(srgb_to_linear(128.f / 255.f));
+    png.at(1, 0) = Color3f(1.f);
+    write_image((dir / "gray.png").string(), png);
+    auto decoded = bitmap("gray.png", "nearest");
+    auto raw = bitmap("gray.png", "nearest", "", true);
+    // Code 128 decodes to 0.2158605 (IEC 61966-2-1); float pow roundoff ~1e-7.
+    EXPECT_NEAR(at_uv(*decoded, 0.25f, 0.5f).x, 0.2158605f, 1e-6f);
+    EXPECT_NEAR(at_uv(*raw, 0.25f, 0.5f).x, 128.f / 255.f, 1e-6f);
+    // EXR data is linear whatever `raw` says.
+    auto exr_raw = bitmap("grid.exr", "nearest", "", true);
+    EXPECT_EQ(at_uv(*exr_raw, 0.9f, 0.9f), img.at(3, 1));
+}
+
+TEST_F(TextureFixture, BadParametersAreLoadErrors) {
+    EXPECT_THROW(bitmap("grid.exr", "trilinear"), LoadError);
+    EXPECT_THROW(bitmap("grid.exr", "", "wrap"), LoadError);
+    EXPECT_THROW(bitmap("missing.png"), LoadError);
+    const std::string garbage = (dir / "garbage.jpg").string();
+    {
+        std::FILE* f = std::fopen(garbage.c_str(), "w");
+        std::fputs("nope", f);
+        std::fclose(f);
+    }
+    try {
+        bitmap("garbage.jpg");
+        FAIL();
+    } catch (const LoadError& e) {
+        EXPECT_NE(std::string(e.what()).find("scene.xml:7"), std::string::npos) << e.what();
+    }
+}
+
+TEST(CamTexture, CheckerboardPattern) {
+    LoadContext ctx;
+    Properties props("checkerboard", {"scene.xml", 3});
+    auto tex = std::static_pointer_cast<Texture>(make_texture(props, ctx));
+    // Mitsuba: color0 (0.4) where (frac(u) > .5) == (frac(v) > .5), else color1 (0.2).
+    EXPECT_EQ(at_uv(*tex, 0.25f, 0.25f), Color3f(0.4f));
+    EXPECT_EQ(at_uv(*tex, 0.75f, 0.25f), Color3f(0.2f));
+    EXPECT_EQ(at_uv(*tex, 0.25f, 0.75f), Color3f(0.2f));
+    EXPECT_EQ(at_uv(*tex, 0.75f, 0.75f), Color3f(0.4f));
+    EXPECT_EQ(at_uv(*tex, 1.25f, -0.25f), Color3f(0.2f)); // frac(-0.25) = 0.75
+    EXPECT_EQ(tex->mean(), Color3f(0.3f));
+
+    Properties scaled("checkerboard", {"scene.xml", 4});
+    scaled.set("color0", ColorValue{Color3f(1.f, 0.f, 0.f)}, {"scene.xml", 5});
+    scaled.set("to_uv", Transform::scale(Vec3f(4.f, 4.f, 1.f)), {"scene.xml", 6});
+    auto tex4 = std::static_pointer_cast<Texture>(make_texture(scaled, ctx));
+    EXPECT_TRUE(scaled.unqueried().empty());
+    EXPECT_EQ(at_uv(*tex4, 0.0625f, 0.0625f), Color3f(1.f, 0.f, 0.f)); // (0.25, 0.25) after scaling
+    EXPECT_EQ(at_uv(*tex4, 0.1875f, 0.0625f), Color3f(0.2f));          // (0.75, 0.25)
+}
+
+TEST(CamTexture, ConstantAndUnsupported) {
+    auto c = make_constant_texture(Color3f(0.1f, 0.2f, 0.3f));
+    EXPECT_TRUE(c->is_constant());
+    EXPECT_EQ(at_uv(*c, 5.f, -3.f), Color3f(0.1f, 0.2f, 0.3f));
+    SurfaceInteraction3f si;
+    EXPECT_NEAR(c->eval_1(si), 0.2f, 1e-7f); // mean of the channels, float roundoff
+    LoadContext ctx;
+    EXPECT_THROW(make_texture(Properties("wavelet", {"scene.xml", 9}), ctx), LoadError);
+}

@@ -1,0 +1,236 @@
+// Every malformed scene gives one LoadError "file:line: message" that names what was expected.
+#include "scene/scene.h"
+#include "scene/xml_parser.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+using namespace penumbra;
+namespace fs = std::filesystem;
+
+namespace {
+
+// The message of the LoadError thrown by `fn` (fails the test if nothing or something else is thrown).
+template <typename Fn> std::string error_of(Fn&& fn) {
+    try {
+        fn();
+    } catch (const LoadError& e) {
+        const std::string msg = e.what();
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << "multi-line error: " << msg;
+        EXPECT_EQ(msg.rfind(e.location.str() + ": ", 0), 0u)
+            << "message does not start with its location: " << msg;
+        return msg;
+    }
+    ADD_FAILURE() << "no LoadError thrown";
+    return {};
+}
+
+std::string string_error(const std::string& xml, const std::map<std::string, std::string>& defines = {}) {
+    return error_of([&] { parse_xml_string(xml, ".", defines); });
+}
+
+// Wraps the body in a version 3 scene whose first body line is line 2.
+std::string scene(const std::string& body) { return "<scene version=\"3.0.0\">\n" + body + "\n</scene>\n"; }
+
+#define EXPECT_CONTAINS(haystack, needle) EXPECT_NE((haystack).find(needle), std::string::npos) << (haystack)
+
+class TempDir {
+  public:
+    TempDir() {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        path_ = fs::temp_directory_path() / ("penumbra_xmlerr_" + std::string(info->name()));
+        fs::remove_all(path_);
+        fs::create_directories(path_);
+    }
+    ~TempDir() { fs::remove_all(path_); }
+    std::string write(const std::string& rel, const std::string& text) const {
+        const fs::path p = path_ / rel;
+        fs::create_directories(p.parent_path());
+        std::ofstream(p) << text;
+        return p.string();
+    }
+
+  private:
+    fs::path path_;
+};
+
+} // namespace
+
+TEST(XmlErrors, MalformedXml) {
+    const std::string msg =
+        string_error(scene("<bsdf type=\"diffuse\">\n<float name=\"a\" value=\"1\">\n</bsdf>"));
+    EXPECT_CONTAINS(msg, "<string>:4: malformed XML");
+}
+
+TEST(XmlErrors, UnknownTag) {
+    const std::string msg =
+        string_error(scene("<bsdf type=\"diffuse\">\n  <colour name=\"a\" value=\"1\"/>\n</bsdf>"));
+    EXPECT_CONTAINS(msg, "<string>:3: unexpected tag <colour>");
+    EXPECT_CONTAINS(msg, "expected an object");
+}
+
+TEST(XmlErrors, BadNumbers) {
+    EXPECT_CONTAINS(
+        string_error(scene("<bsdf type=\"x\">\n<float name=\"alpha\" value=\"1.0x\"/></bsdf>")),
+        "<string>:3: <float name=\"alpha\"> attribute 'value': expected a floating-point number, got '1.0x'");
+    EXPECT_CONTAINS(string_error(scene("<bsdf type=\"x\"><integer name=\"n\" value=\"3.5\"/></bsdf>")),
+                    "<string>:2: <integer name=\"n\"> attribute 'value': expected an integer, got '3.5'");
+    EXPECT_CONTAINS(string_error(scene("<bsdf type=\"x\"><boolean name=\"b\" value=\"yes\"/></bsdf>")),
+                    "expected 'true' or 'false', got 'yes'");
+    EXPECT_CONTAINS(string_error(scene("<bsdf type=\"x\"><rgb name=\"c\" value=\"0.1 0.2\"/></bsdf>")),
+                    "<rgb name=\"c\"> attribute 'value': expected 1 or 3 numbers, got '0.1 0.2'");
+    EXPECT_CONTAINS(
+        string_error(scene("<shape type=\"x\"><transform name=\"to_world\">\n<translate x=\"one\"/>"
+                           "</transform></shape>")),
+        "<string>:3: <translate> attribute 'x': expected a floating-point number, got 'one'");
+    EXPECT_CONTAINS(string_error(scene("<shape type=\"x\"><transform name=\"t\"><matrix value=\"1 0 0 1\"/>"
+                                       "</transform></shape>")),
+                    "<matrix> attribute 'value': expected 16 (or 9) numbers, got 4");
+    EXPECT_CONTAINS(
+        string_error(scene("<bsdf type=\"x\"><spectrum name=\"s\" value=\"500:0.1, 400\"/></bsdf>")),
+        "expected wavelength:value pairs, got '400'");
+}
+
+TEST(XmlErrors, UnknownReferenceId) {
+    const std::string msg =
+        string_error(scene("<shape type=\"cube\">\n\n  <ref name=\"bsdf\" id=\"missing_mat\"/>\n</shape>"));
+    EXPECT_CONTAINS(msg, "<string>:4: reference to unknown id 'missing_mat'");
+    EXPECT_CONTAINS(string_error(scene("<alias id=\"nothing\" as=\"b\"/>")),
+                    "<string>:2: <alias> of unknown id 'nothing'");
+}
+
+TEST(XmlErrors, UndefinedVariable) {
+    const std::string xml =
+        scene("<sensor type=\"perspective\">\n<float name=\"fov\" value=\"$fov_deg\"/></sensor>");
+    EXPECT_CONTAINS(string_error(xml), "<string>:3: undefined parameter '$fov_deg' in attribute 'value'");
+    EXPECT_NO_THROW(parse_xml_string(xml, ".", {{"fov_deg", "45"}}));
+    // A default declared after its use does not apply (document order, as in Mitsuba).
+    EXPECT_CONTAINS(string_error(scene("<bsdf type=\"$t\"/>\n<default name=\"t\" value=\"diffuse\"/>")),
+                    "undefined parameter '$t' in attribute 'type'");
+}
+
+TEST(XmlErrors, IncludeCycle) {
+    TempDir dir;
+    dir.write("a.xml", scene("<include filename=\"b.xml\"/>"));
+    dir.write("b.xml", scene("\n<include filename=\"a.xml\"/>"));
+    const std::string main = dir.write("main.xml", scene("<include filename=\"a.xml\"/>"));
+    const std::string msg = error_of([&] { parse_xml_file(main); });
+    EXPECT_CONTAINS(msg, "b.xml:3: include cycle:");
+    EXPECT_CONTAINS(msg, "a.xml -> ");
+    // Including the main file from itself is a cycle too.
+    EXPECT_CONTAINS(
+        error_of([&] { parse_xml_file(dir.write("self.xml", scene("<include filename=\"self.xml\"/>"))); }),
+        "self.xml:2: include cycle");
+}
+
+TEST(XmlErrors, MissingIncludeFile) {
+    TempDir dir;
+    const std::string main = dir.write("main.xml", scene("\n<include filename=\"nowhere/parts.xml\"/>"));
+    EXPECT_CONTAINS(error_of([&] { parse_xml_file(main); }),
+                    "main.xml:3: included file 'nowhere/parts.xml' not found");
+}
+
+TEST(XmlErrors, ErrorsInsideIncludedFilesNameThatFile) {
+    TempDir dir;
+    dir.write("part.xml", scene("<bsdf type=\"diffuse\">\n\n<float name=\"x\" value=\"bad\"/></bsdf>"));
+    const std::string main = dir.write("main.xml", scene("<include filename=\"part.xml\"/>"));
+    EXPECT_CONTAINS(error_of([&] { parse_xml_file(main); }), "part.xml:4: <float name=\"x\">");
+}
+
+TEST(XmlErrors, DuplicateParameterAndId) {
+    const std::string msg =
+        string_error(scene("<bsdf type=\"diffuse\">\n  <float name=\"alpha\" value=\"1\"/>\n  <float "
+                           "name=\"alpha\" value=\"2\"/>\n</bsdf>"));
+    EXPECT_CONTAINS(msg, "<string>:4: ");
+    EXPECT_CONTAINS(msg, "'alpha'");
+    EXPECT_CONTAINS(msg, "<string>:3"); // the first declaration
+    EXPECT_CONTAINS(string_error(scene("<bsdf type=\"a\" id=\"m\"/>\n<bsdf type=\"b\" id=\"m\"/>")),
+                    "<string>:3: duplicate id 'm' (first declared at <string>:2)");
+}
+
+TEST(XmlErrors, MissingOrUnexpectedAttributes) {
+    EXPECT_CONTAINS(string_error(scene("<bsdf type=\"x\"><float name=\"a\"/></bsdf>")),
+                    "<string>:2: missing attribute 'value' in <float>");
+    EXPECT_CONTAINS(string_error(scene("<bsdf id=\"a\"/>")),
+                    "<string>:2: missing attribute 'type' in <bsdf>");
+    EXPECT_CONTAINS(string_error(scene("<bsdf type=\"x\"><float name=\"a\" value=\"1\" unit=\"m\"/></bsdf>")),
+                    "unexpected attribute 'unit' in <float> (expected name, value)");
+    EXPECT_CONTAINS(string_error(scene("<bsdf type=\"x\"><spectrum name=\"s\"/></bsdf>")),
+                    "expected exactly one of the attributes 'value' and 'filename'");
+    EXPECT_CONTAINS(string_error(scene("<bsdf type=\"x\" name=\"_arg_0\"/>")),
+                    "leading underscore is reserved");
+}
+
+TEST(XmlErrors, VersionAndRoot) {
+    EXPECT_CONTAINS(string_error("<scene version=\"0.6.0\">\n<shape type=\"obj\"/>\n</scene>"),
+                    "<string>:1: scene version 0.6.0 is a Mitsuba 0.6 scene");
+    EXPECT_CONTAINS(string_error("<scene>\n</scene>"), "<string>:1: missing attribute 'version' in <scene>");
+    EXPECT_CONTAINS(string_error("<scene version=\"three\"/>"), "could not parse scene version 'three'");
+    EXPECT_CONTAINS(string_error("<bsdf type=\"diffuse\" version=\"3.0.0\"/>"),
+                    "expected the root element <scene>");
+}
+
+TEST(XmlErrors, MisplacedElements) {
+    EXPECT_CONTAINS(string_error(scene("<float name=\"a\" value=\"1\"/>")),
+                    "<string>:2: <float> must appear inside an object, not directly in <scene>");
+    EXPECT_CONTAINS(string_error(scene("<shape type=\"x\"><translate x=\"1\"/></shape>")),
+                    "<translate> may only appear inside <transform>");
+    EXPECT_CONTAINS(
+        string_error(scene("<shape type=\"x\"><transform name=\"t\"><float name=\"a\" value=\"1\"/>"
+                           "</transform></shape>")),
+        "<transform> may only contain translate, rotate, scale, matrix and lookat (got <float>)");
+    EXPECT_CONTAINS(string_error(scene("<bsdf type=\"x\"><path value=\".\"/></bsdf>")),
+                    "<path> may only appear directly inside <scene>");
+    EXPECT_CONTAINS(string_error(scene("<path value=\"no/such/folder\"/>")),
+                    "<path>: folder 'no/such/folder' not found");
+    EXPECT_CONTAINS(string_error(scene("<shape type=\"x\">some text</shape>")),
+                    "unexpected text 'some text'");
+}
+
+TEST(XmlErrors, InvalidTransforms) {
+    EXPECT_CONTAINS(string_error(scene(
+                        "<shape type=\"x\"><transform name=\"t\">\n<lookat origin=\"0 0 0\" target=\"0 0 1\""
+                        " up=\"0 0 1\"/></transform></shape>")),
+                    "<string>:3: <lookat>: ");
+    EXPECT_CONTAINS(
+        string_error(scene("<shape type=\"x\"><transform name=\"t\"><lookat origin=\"0 0 0\" target=\"0 1\"/>"
+                           "</transform></shape>")),
+        "<lookat> attribute 'target': expected 3 numbers, got '0 1'");
+    EXPECT_CONTAINS(string_error(scene("<shape type=\"x\"><transform name=\"t\"><rotate angle=\"30\"/>"
+                                       "</transform></shape>")),
+                    "<rotate>: expected a non-zero rotation axis");
+    EXPECT_CONTAINS(string_error(scene("<shape type=\"x\"><transform name=\"t\"><rotate x=\"1\"/>"
+                                       "</transform></shape>")),
+                    "missing attribute 'angle' in <rotate>");
+    EXPECT_CONTAINS(
+        string_error(scene("<shape type=\"x\"><transform name=\"t\"><matrix value=\"0 0 0 0 0 0 0 0 0\"/>"
+                           "</transform></shape>")),
+        "<matrix>: expected an invertible matrix");
+}
+
+TEST(XmlErrors, LoaderRejectsWhatPenumbraCannotRender) {
+    const auto load_error = [](const std::string& xml) { return error_of([&] { load_scene_string(xml); }); };
+    // Unsupported plugin: exactly one line at the declaration.
+    EXPECT_EQ(load_error(scene("<shape type=\"cube\">\n  <bsdf type=\"hair\"/>\n</shape>")),
+              "<string>:3: unsupported bsdf plugin 'hair'");
+    // A parameter the plugin does not know.
+    const std::string unknown =
+        load_error(scene("<bsdf type=\"diffuse\">\n<float name=\"roughness\" value=\"1\"/></bsdf>"));
+    EXPECT_CONTAINS(unknown, "<string>:3: ");
+    EXPECT_CONTAINS(unknown, "'roughness'");
+    // penumbra renders one sensor; Mitsuba allows one integrator.
+    EXPECT_CONTAINS(load_error(scene("<sensor type=\"perspective\"/>\n<sensor type=\"orthographic\"/>")),
+                    "<string>:3: a second <sensor>");
+    EXPECT_CONTAINS(load_error(scene("<integrator type=\"path\"/>\n<integrator type=\"direct\"/>")),
+                    "<string>:3: only one <integrator>");
+    EXPECT_CONTAINS(
+        load_error(scene("<medium type=\"homogeneous\">\n<phase type=\"hg\"><float name=\"g\" value=\"1.5\"/>"
+                         "</phase></medium>")),
+        "<string>:3: hg: the asymmetry parameter 'g' must lie in (-1, 1)");
+    EXPECT_CONTAINS(load_error(scene("<bsdf type=\"twosided\" id=\"loop\">\n<ref id=\"loop\"/></bsdf>")),
+                    "<string>:2: circular reference: bsdf 'loop'");
+    EXPECT_EQ(load_error(scene("<sensor type=\"perspective\"><sampler type=\"stratified\"/></sensor>")),
+              "<string>:2: unsupported sampler plugin 'stratified'");
+}
