@@ -1,5 +1,6 @@
 // Primal throughput of `path` on a 200k-triangle scene, and raw Embree incoherent-ray throughput on the same
 // geometry in the same run; prints their ratio (rays cast by the integrator per second / raw rays per second).
+#include "core/distribution.h"
 #include "core/rng.h"
 #include "core/warp.h"
 #include "render/render.h"
@@ -82,7 +83,7 @@ Scene& scene() {
     return *s;
 }
 
-double g_path_rays_per_s = 0, g_raw_rays_per_s = 0;
+double g_path_rays_per_s = 0, g_raw_rays_per_s = 0; // raw: volume workload
 
 void BM_PathPrimal(benchmark::State& state) {
     RenderOptions opt;
@@ -101,63 +102,107 @@ void BM_PathPrimal(benchmark::State& state) {
     state.counters["triangles"] = double(scene().triangle_count());
 }
 
-// Raw Embree: rtcIntersect1 on random rays (origins in the scene's bounding sphere, uniform directions),
-// same geometry, same build quality and the same threads as the integrator.
-void BM_RawEmbreeIncoherent(benchmark::State& state) {
+// Raw Embree on the same geometry, same build quality and threads as the integrator: rtcIntersect1 on
+// incoherent rays drawn from one of two workloads.
+enum class RayWorkload {
+    Surface, // origins on the surfaces (by area), directions uniform over the hemisphere of the normal: the
+             // distribution of a path tracer's secondary rays
+    Volume,  // origins uniform in the scene's bounding sphere, directions uniform (most rays miss everything)
+};
+
+struct RawEmbree {
     RTCDevice device = rtcNewDevice(nullptr);
-    RTCScene rs = rtcNewScene(device);
-    rtcSetSceneBuildQuality(rs, RTC_BUILD_QUALITY_HIGH);
-    rtcSetSceneFlags(rs, RTC_SCENE_FLAG_ROBUST);
-    for (const auto& shape : scene().shapes) {
-        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 12,
-                                                              shape->mesh.vertex_count()));
-        std::memcpy(v, shape->mesh.positions.data(), shape->mesh.vertex_count() * 12);
-        auto* i = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12,
-                                                                 shape->mesh.face_count()));
-        std::memcpy(i, shape->mesh.indices.data(), shape->mesh.indices.size() * 4);
-        rtcCommitGeometry(g);
-        rtcAttachGeometry(rs, g);
-        rtcReleaseGeometry(g);
+    RTCScene scene = rtcNewScene(device);
+    explicit RawEmbree(const Scene& s) {
+        rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
+        rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+        for (const auto& shape : s.shapes) {
+            RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+            auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                                  12, shape->mesh.vertex_count()));
+            std::memcpy(v, shape->mesh.positions.data(), shape->mesh.vertex_count() * 12);
+            auto* i = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                     12, shape->mesh.face_count()));
+            std::memcpy(i, shape->mesh.indices.data(), shape->mesh.indices.size() * 4);
+            rtcCommitGeometry(g);
+            rtcAttachGeometry(scene, g);
+            rtcReleaseGeometry(g);
+        }
+        rtcCommitScene(scene);
     }
-    rtcCommitScene(rs);
-    const BoundingSphere bs = scene().bounding_sphere();
-    constexpr int n_rays = 1 << 21;
-    double seconds = 0, rays = 0;
+    ~RawEmbree() {
+        rtcReleaseScene(scene);
+        rtcReleaseDevice(device);
+    }
+};
+
+// Rays are generated up front so that only traversal is timed.
+std::vector<Ray> make_rays(const Scene& s, RayWorkload workload, int n) {
+    std::vector<Ray> rays(n);
+    std::vector<float> areas;
+    for (const auto& shape : s.shapes) areas.push_back(shape->surface_area());
+    const DiscreteDistribution shapes(areas);
+    const BoundingSphere bs = s.bounding_sphere();
+    PCG32 rng(17, 3);
+    for (Ray& ray : rays) {
+        if (workload == RayWorkload::Surface) {
+            float u = rng.next_float();
+            const Shape& shape = *s.shapes[shapes.sample(u)];
+            const PositionSample3f ps = shape.sample_position({u, rng.next_float()});
+            Vec3f d = warp::square_to_uniform_sphere({rng.next_float(), rng.next_float()});
+            if (dot(d, ps.n) < 0.f) d = -d;
+            Interaction3f it;
+            it.p = ps.p;
+            it.n = ps.n;
+            ray = it.spawn_ray(d);
+        } else {
+            const Vec3f o = bs.center + warp::square_to_uniform_sphere({rng.next_float(), rng.next_float()}) *
+                                            (bs.radius * std::cbrt(rng.next_float()));
+            ray = Ray(o, warp::square_to_uniform_sphere({rng.next_float(), rng.next_float()}));
+        }
+    }
+    return rays;
+}
+
+void BM_RawEmbree(benchmark::State& state, RayWorkload workload, double* rays_per_s) {
+    const RawEmbree raw(scene());
+    constexpr int n_rays = 1 << 20;
+    const std::vector<Ray> rays = make_rays(scene(), workload, n_rays);
+    double seconds = 0, traced = 0;
     std::atomic<int> hits{0};
     for (auto _ : state) {
         const auto start = std::chrono::steady_clock::now();
         tbb::parallel_for(tbb::blocked_range<int>(0, n_rays, 4096), [&](const tbb::blocked_range<int>& r) {
-            PCG32 rng(uint64_t(r.begin()), 7);
             RTCIntersectContext ctx;
             rtcInitIntersectContext(&ctx);
             int local_hits = 0;
             for (int k = r.begin(); k < r.end(); ++k) {
-                const Vec3f o = bs.center + warp::square_to_uniform_sphere({rng.next_float(), rng.next_float()}) *
-                                                (bs.radius * std::cbrt(rng.next_float()));
-                const Vec3f d = warp::square_to_uniform_sphere({rng.next_float(), rng.next_float()});
+                const Ray& ray = rays[k];
                 RTCRayHit rh{};
-                rh.ray.org_x = o.x, rh.ray.org_y = o.y, rh.ray.org_z = o.z;
-                rh.ray.dir_x = d.x, rh.ray.dir_y = d.y, rh.ray.dir_z = d.z;
-                rh.ray.tnear = 0.f, rh.ray.tfar = Infinity, rh.ray.mask = ~0u;
+                rh.ray.org_x = ray.o.x, rh.ray.org_y = ray.o.y, rh.ray.org_z = ray.o.z;
+                rh.ray.dir_x = ray.d.x, rh.ray.dir_y = ray.d.y, rh.ray.dir_z = ray.d.z;
+                rh.ray.tnear = 0.f, rh.ray.tfar = ray.tmax, rh.ray.mask = ~0u;
                 rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                rtcIntersect1(rs, &ctx, &rh);
+                rtcIntersect1(raw.scene, &ctx, &rh);
                 local_hits += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
             }
             hits += local_hits;
         });
         seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        rays += n_rays;
+        traced += n_rays;
     }
-    g_raw_rays_per_s = rays / seconds;
-    state.counters["rays/s"] = g_raw_rays_per_s;
-    state.counters["hit_fraction"] = double(hits) / rays;
-    rtcReleaseScene(rs);
-    rtcReleaseDevice(device);
+    *rays_per_s = traced / seconds;
+    state.counters["rays/s"] = *rays_per_s;
+    state.counters["hit_fraction"] = double(hits) / traced;
 }
 
+double g_surface_rays_per_s = 0;
+
 BENCHMARK(BM_PathPrimal)->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
-BENCHMARK(BM_RawEmbreeIncoherent)->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
+BENCHMARK_CAPTURE(BM_RawEmbree, surface_incoherent, RayWorkload::Surface, &g_surface_rays_per_s)
+    ->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
+BENCHMARK_CAPTURE(BM_RawEmbree, volume_incoherent, RayWorkload::Volume, &g_raw_rays_per_s)
+    ->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
 
 } // namespace
 
@@ -165,10 +210,13 @@ int main(int argc, char** argv) {
     benchmark::Initialize(&argc, argv);
     scene(); // load outside the timed region
     benchmark::RunSpecifiedBenchmarks();
-    if (g_path_rays_per_s > 0 && g_raw_rays_per_s > 0)
-        std::printf("path integrator rays/s / raw Embree incoherent rays/s = %.3f  (%zu triangles, %d threads)\n",
-                    g_path_rays_per_s / g_raw_rays_per_s, scene().triangle_count(),
-                    tbb::this_task_arena::max_concurrency());
+    if (g_path_rays_per_s > 0 && g_surface_rays_per_s > 0 && g_raw_rays_per_s > 0) {
+        std::printf("%zu triangles, %d threads\n", scene().triangle_count(), tbb::this_task_arena::max_concurrency());
+        std::printf("path integrator rays/s / raw Embree surface-origin incoherent rays/s = %.3f\n",
+                    g_path_rays_per_s / g_surface_rays_per_s);
+        std::printf("path integrator rays/s / raw Embree volume-origin incoherent rays/s  = %.3f\n",
+                    g_path_rays_per_s / g_raw_rays_per_s);
+    }
     benchmark::Shutdown();
     return 0;
 }

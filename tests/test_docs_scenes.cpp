@@ -21,6 +21,9 @@ struct DocScene {
     const char* type; // the unsupported plugin type, parameter name, or the file that cannot be found
 };
 
+// Printed by ctest/gtest when naming a case: the file name, not the struct's bytes.
+void PrintTo(const DocScene& scene, std::ostream* os) { *os << scene.file; }
+
 // Worked out by reading each file (and its includes): plugins outside penumbra's set make a scene
 // unsupported.
 const DocScene kScenes[] = {

@@ -233,4 +233,7 @@ TEST(XmlErrors, LoaderRejectsWhatPenumbraCannotRender) {
                     "<string>:2: circular reference: bsdf 'loop'");
     EXPECT_EQ(load_error(scene("<sensor type=\"perspective\"><sampler type=\"stratified\"/></sensor>")),
               "<string>:2: unsupported sampler plugin 'stratified'");
+    // An area emitter only makes sense attached to the shape that emits.
+    EXPECT_EQ(load_error(scene("<emitter type=\"area\"/>")),
+              "<string>:2: an area emitter must be nested inside the <shape> that emits");
 }

@@ -42,13 +42,21 @@ void ReconstructionFilter::init_sampling() {
         c = float(c / sum);
     cdf_.back() = 1.f;
     integral_ = float(sum * h);
+    // Guide table: guide_[k] is the bin holding u = k / FilterTableSize, so inversion starts next to its answer.
+    guide_.assign(FilterTableSize + 1, 0);
+    int bin = 0;
+    for (int k = 0; k <= FilterTableSize; ++k) {
+        const float u = float(k) / FilterTableSize;
+        while (bin < FilterTableSize - 1 && cdf_[bin + 1] <= u) ++bin;
+        guide_[k] = bin;
+    }
 }
 
 // Inverts the piecewise-linear CDF independently along x and y (the filter is separable).
 Vec2f ReconstructionFilter::sample(const Vec2f& u) const {
     auto invert = [&](float ui) {
-        const auto it = std::upper_bound(cdf_.begin() + 1, cdf_.end() - 1, ui);
-        const int i = int(it - cdf_.begin()) - 1;
+        int i = guide_[std::min(int(ui * FilterTableSize), FilterTableSize)];
+        while (i < FilterTableSize - 1 && cdf_[i + 1] <= ui) ++i;
         const float width = cdf_[i + 1] - cdf_[i];
         const float t = width > 0.f ? (ui - cdf_[i]) / width : 0.5f;
         return -radius_ + (float(i) + std::clamp(t, 0.f, 1.f)) * (2.f * radius_ / FilterTableSize);

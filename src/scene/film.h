@@ -25,6 +25,7 @@ protected:
 
 private:
     std::vector<float> cdf_;
+    std::vector<int> guide_;
     float integral_ = 1.f;
 };
 

@@ -108,9 +108,13 @@ std::unique_ptr<Scene> build_scene(const XmlScene& xml, const std::string& sourc
         case ObjectKind::Shape:
             add_shape(*scene, obj);
             break;
-        case ObjectKind::Emitter:
-            scene->emitters.push_back(as<Emitter>(obj, ObjectKind::Emitter));
+        case ObjectKind::Emitter: {
+            auto emitter = as<Emitter>(obj, ObjectKind::Emitter);
+            if (emitter->flags() & EmitterSurface)
+                throw LoadError(child.location, "an area emitter must be nested inside the <shape> that emits");
+            scene->emitters.push_back(std::move(emitter));
             break;
+        }
         case ObjectKind::Sensor:
             if (scene->sensor)
                 throw LoadError(child.location,

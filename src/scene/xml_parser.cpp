@@ -4,7 +4,7 @@
 //  - transform operations compose in document order, each new one applied after the previous: T = op * T;
 //  - <spectrum> lists are converted to linear sRGB, bounded to [0,1] unless declared inside an <emitter> or
 //  named
-//    eta / k / int_ior / ext_ior; spectra inside an <emitter> are illuminants;
+//    eta / k / int_ior / ext_ior; spectra outside an <emitter> are weighted by D65 (Mitsuba >= 3.6);
 //  - <path> directories are relative to the file declaring them, <include> files resolve against the search
 //  paths.
 #include "scene/xml_parser.h"
@@ -499,8 +499,11 @@ class Parser {
         for (size_t i = 1; i < samples.size(); ++i)
             if (samples[i].first <= samples[i - 1].first)
                 throw LoadError(loc, what + ": wavelengths must be strictly increasing");
-        const bool bounded = !(within_emitter || is_unbounded_spectrum(name));
-        return spectrum_to_rgb(samples, bounded, within_emitter);
+        // Mitsuba 3 (xml.cpp): reflectance-like spectra are integrated against CIE x D65 to match its spectral
+        // modes; emission spectra are not (unless unbounded, e.g. an IOR inside an emitter).
+        const bool unbounded = is_unbounded_spectrum(name);
+        const bool bounded = !(within_emitter || unbounded);
+        return spectrum_to_rgb(samples, bounded, /* d65 */ !(within_emitter && !unbounded));
     }
 
     Transform parse_transform(const pugi::xml_node& e, const Source& src) const {
