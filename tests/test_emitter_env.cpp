@@ -1,18 +1,11 @@
 // Infinite emitters: constant and envmap (lat-long convention, sampling density, irradiance, loading).
 #include "core/image.h"
 #include "core/rng.h"
-#include "scene/emitter.h"
-#include "scene/factory.h"
+#include "scene/emitters/emitters.h"
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
-
-namespace penumbra {
-// Internal constructor of envmap.cpp (in-memory image).
-std::shared_ptr<Emitter> make_envmap_emitter(Image image, float scale, const Transform& to_world,
-                                             bool mis_compensation);
-} // namespace penumbra
 
 using namespace penumbra;
 
@@ -45,7 +38,8 @@ Vec3f latlong(float u, float v) {
 Image test_image() {
     Image img(8, 5);
     for (int y = 0; y < 5; ++y)
-        for (int x = 0; x < 8; ++x) img.at(x, y) = Color3f(1.f + x, 1.f + 2.f * y, 0.5f);
+        for (int x = 0; x < 8; ++x)
+            img.at(x, y) = Color3f(1.f + x, 1.f + 2.f * y, 0.5f);
     img.at(2, 2) = Color3f(60.f, 40.f, 20.f);
     return img;
 }
@@ -112,7 +106,8 @@ TEST(EmitterConstant, SampleRayEntersTheBoundingSphereCosineWeighted) {
     PCG32 rng(4);
     Stats cosines;
     for (int i = 0; i < 50000; ++i) {
-        auto [ray, w] = e->sample_ray({rng.next_float(), rng.next_float()}, {rng.next_float(), rng.next_float()});
+        auto [ray, w] =
+            e->sample_ray({rng.next_float(), rng.next_float()}, {rng.next_float(), rng.next_float()});
         const Vec3f inward = normalize(b.center - ray.o);
         ASSERT_NEAR(norm(ray.o - b.center), 2.f, 1e-3f);
         ASSERT_GE(dot(ray.d, inward), 0.f);
@@ -204,7 +199,8 @@ TEST(EmitterEnvmap, SampledDirectionsFollowThePdf) {
         return 0.0;
     });
     PCG32 rng(8);
-    for (int k = 0; k < n; ++k) observed[bin_of(e->sample_direction(ref, {rng.next_float(), rng.next_float()}).first.d)]++;
+    for (int k = 0; k < n; ++k)
+        observed[bin_of(e->sample_direction(ref, {rng.next_float(), rng.next_float()}).first.d)]++;
     double chi2 = 0;
     for (size_t b = 0; b < expected.size(); ++b) {
         ASSERT_GT(expected[b], 20.0);
@@ -219,9 +215,8 @@ TEST(EmitterEnvmap, IrradianceMatchesQuadrature) {
     auto e = make_envmap_emitter(test_image(), 1.f, Transform(), false);
     const Vec3f n = normalize(Vec3f(0.4f, 0.6f, -0.3f));
     const Interaction3f ref = point_at(Vec3f(0.f), n);
-    const double reference = sphere_quadrature(1024, 512, [&](const Vec3f& d) {
-        return e->eval_environment(d).x * std::max(0.f, dot(d, n));
-    });
+    const double reference = sphere_quadrature(
+        1024, 512, [&](const Vec3f& d) { return e->eval_environment(d).x * std::max(0.f, dot(d, n)); });
     PCG32 rng(9);
     Stats s;
     for (int i = 0; i < 100000; ++i) {
@@ -239,11 +234,13 @@ TEST(EmitterEnvmap, SampleRayPowerMatchesPower) {
     PCG32 rng(10);
     Stats s;
     for (int i = 0; i < 100000; ++i) {
-        auto [ray, w] = e->sample_ray({rng.next_float(), rng.next_float()}, {rng.next_float(), rng.next_float()});
+        auto [ray, w] =
+            e->sample_ray({rng.next_float(), rng.next_float()}, {rng.next_float(), rng.next_float()});
         ASSERT_LT(dot(ray.o - b.center, ray.d), 0.f); // starts outside, heading into the sphere
         s.add(w.x);
     }
-    // pi r^2 int L dw: the power estimate uses a midpoint rule over the bilinear cells (error well below the 3 stderr).
+    // pi r^2 int L dw: the power estimate uses a midpoint rule over the bilinear cells (error well below the
+    // 3 stderr).
     EXPECT_NEAR(s.mean(), e->power().x, 3 * s.stderr_() + 1e-3 * e->power().x);
 }
 

@@ -2,6 +2,8 @@
 #include "core/error.h"
 #include "scene/mesh.h"
 
+#include "mesh_test_util.h"
+
 #include <gtest/gtest.h>
 #include <zlib.h>
 
@@ -9,31 +11,21 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <functional>
-#include <unistd.h>
 
 using namespace penumbra;
+using penumbra::test::error_of;
+using penumbra::test::ScratchDir;
 namespace fs = std::filesystem;
 
 namespace {
 
-// A per-process scratch directory, removed when the test program exits.
-struct ScratchDir {
-    fs::path path = fs::temp_directory_path() / ("penumbra_test_mesh_" + std::to_string(::getpid()));
-    ScratchDir() { fs::create_directories(path); }
-    ~ScratchDir() { fs::remove_all(path); }
-};
-
 fs::path temp_dir() {
-    static const ScratchDir dir;
+    static const ScratchDir dir("penumbra_test_mesh_");
     return dir.path;
 }
 
 std::string write_file(const std::string& name, const std::string& contents) {
-    const fs::path path = temp_dir() / name;
-    std::ofstream(path, std::ios::binary) << contents;
-    return path.string();
+    return test::write_file(temp_dir(), name, contents);
 }
 
 // Appends the bytes of v in the requested byte order.
@@ -44,15 +36,6 @@ template <typename V> void put(std::string& out, V v, bool little) {
         for (size_t i = 0; i < sizeof(V) / 2; ++i)
             std::swap(b[i], b[sizeof(V) - 1 - i]);
     out.append(reinterpret_cast<const char*>(b), sizeof(V));
-}
-
-std::string error_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "<no error>";
 }
 
 // Corners of the unit square of the ascii test.

@@ -3,14 +3,15 @@
 #include "scene/factory.h"
 #include "scene/shape.h"
 
+#include "mesh_test_util.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <fstream>
-#include <functional>
-#include <unistd.h>
 
 using namespace penumbra;
+using penumbra::test::error_of;
+using penumbra::test::ScratchDir;
 namespace fs = std::filesystem;
 
 namespace {
@@ -18,34 +19,19 @@ namespace {
 const SourceLocation xml{"scene.xml", 7};
 
 // A per-process scratch directory (removed at exit) as the only search path.
-struct ScratchDir {
-    fs::path path = fs::temp_directory_path() / ("penumbra_test_shape_" + std::to_string(::getpid()));
-    ScratchDir() { fs::create_directories(path); }
-    ~ScratchDir() { fs::remove_all(path); }
-};
-
 LoadContext context() {
-    static const ScratchDir dir;
+    static const ScratchDir dir("penumbra_test_shape_");
     return LoadContext{{dir.path.string()}};
 }
 
 void write(const std::string& name, const std::string& contents) {
-    std::ofstream(fs::path(context().search_paths[0]) / name, std::ios::binary) << contents;
+    test::write_file(context().search_paths[0], name, contents);
 }
 
 std::shared_ptr<Shape> build(const Properties& props) {
     auto shape = std::dynamic_pointer_cast<Shape>(make_shape(props, context()));
     props.check_all_queried("shape");
     return shape;
-}
-
-std::string error_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "<no error>";
 }
 
 // Two triangles folded along the x axis (a "tent"), with texture coordinates and no normals.

@@ -2,13 +2,15 @@
 #include "scene/scene.h"
 #include "scene/xml_parser.h"
 
+#include "xml_test_util.h"
+
 #include <gtest/gtest.h>
 
-#include <filesystem>
-#include <fstream>
+#include <map>
+#include <string>
 
 using namespace penumbra;
-namespace fs = std::filesystem;
+using namespace penumbra::test;
 
 namespace {
 
@@ -31,30 +33,7 @@ std::string string_error(const std::string& xml, const std::map<std::string, std
     return error_of([&] { parse_xml_string(xml, ".", defines); });
 }
 
-// Wraps the body in a version 3 scene whose first body line is line 2.
-std::string scene(const std::string& body) { return "<scene version=\"3.0.0\">\n" + body + "\n</scene>\n"; }
-
 #define EXPECT_CONTAINS(haystack, needle) EXPECT_NE((haystack).find(needle), std::string::npos) << (haystack)
-
-class TempDir {
-  public:
-    TempDir() {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        path_ = fs::temp_directory_path() / ("penumbra_xmlerr_" + std::string(info->name()));
-        fs::remove_all(path_);
-        fs::create_directories(path_);
-    }
-    ~TempDir() { fs::remove_all(path_); }
-    std::string write(const std::string& rel, const std::string& text) const {
-        const fs::path p = path_ / rel;
-        fs::create_directories(p.parent_path());
-        std::ofstream(p) << text;
-        return p.string();
-    }
-
-  private:
-    fs::path path_;
-};
 
 } // namespace
 
@@ -235,5 +214,10 @@ TEST(XmlErrors, LoaderRejectsWhatPenumbraCannotRender) {
               "<string>:2: unsupported sampler plugin 'stratified'");
     // An area emitter only makes sense attached to the shape that emits.
     EXPECT_EQ(load_error(scene("<emitter type=\"area\"/>")),
-              "<string>:2: an area emitter must be nested inside the <shape> that emits");
+              "<string>:2: an area emitter must be attached to a shape (nest it in the <shape>, or <ref> it from one)");
+    // ... but declaring it at the top level for a shape to <ref> (as Mitsuba's own scenes do) is fine.
+    const auto s = load_scene_string(scene("<shape type=\"rectangle\"><ref id=\"lamp\"/></shape>\n"
+                                           "<emitter type=\"area\" id=\"lamp\"/>"));
+    ASSERT_EQ(s->emitters.size(), 1u);
+    EXPECT_EQ(s->emitters[0]->shape(), s->shapes[0].get());
 }

@@ -5,12 +5,14 @@
 #include "scene/scene.h"
 #include "scene/xml_parser.h"
 
+#include "xml_test_util.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <fstream>
 
 using namespace penumbra;
+using namespace penumbra::test;
 namespace fs = std::filesystem;
 
 namespace {
@@ -24,8 +26,6 @@ void expect_near(const Vec3f& a, const Vec3f& b) {
     EXPECT_NEAR(a.z, b.z, kEps) << a << " vs " << b;
 }
 
-std::string scene(const std::string& body) { return "<scene version=\"3.0.0\">\n" + body + "\n</scene>\n"; }
-
 // The single top-level object of a parsed scene.
 const XmlNode& only_object(const XmlScene& s) {
     EXPECT_EQ(s.objects.size(), 1u);
@@ -37,27 +37,6 @@ Transform to_world(const std::string& ops) {
         scene("<shape type=\"cube\"><transform name=\"to_world\">" + ops + "</transform></shape>"));
     return only_object(s).props.get_transform("to_world");
 }
-
-class TempDir {
-  public:
-    TempDir() {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        path_ = fs::temp_directory_path() / ("penumbra_xml_" + std::string(info->name()));
-        fs::remove_all(path_);
-        fs::create_directories(path_);
-    }
-    ~TempDir() { fs::remove_all(path_); }
-    std::string write(const std::string& rel, const std::string& text) const {
-        const fs::path p = path_ / rel;
-        fs::create_directories(p.parent_path());
-        std::ofstream(p) << text;
-        return p.string();
-    }
-    std::string str() const { return path_.string(); }
-
-  private:
-    fs::path path_;
-};
 
 } // namespace
 
@@ -151,8 +130,8 @@ TEST(XmlParser, SpectrumListsUseMitsubasBoundedAndIlluminantRules) {
     ASSERT_EQ(shape.children.size(), 2u);
     const Properties& bsdf = shape.children[0].node->props;
     const Properties& emitter = shape.children[1].node->props;
-    // Mitsuba 3 xml.cpp: reflectances are bounded, IOR and emission spectra are not; everything but emission is
-    // integrated against D65 (bounded = !(emitter || unbounded), d65 = !(emitter && !unbounded)).
+    // Mitsuba 3 xml.cpp: reflectances are bounded, IOR and emission spectra are not; everything but emission
+    // is integrated against D65 (bounded = !(emitter || unbounded), d65 = !(emitter && !unbounded)).
     EXPECT_EQ(bsdf.get_color("specular_reflectance"), spectrum_to_rgb(samples, true, true));
     EXPECT_EQ(bsdf.get_color("eta"), spectrum_to_rgb(samples, false, true));
     EXPECT_EQ(emitter.get_color("radiance"), spectrum_to_rgb(samples, false, false));

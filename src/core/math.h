@@ -15,10 +15,6 @@ constexpr float Infinity = std::numeric_limits<float>::infinity();
 // Offset used when spawning rays, relative to the magnitude of the origin.
 constexpr float RayEpsilon = 1e-4f;
 
-// Every scalar type in which physics code is instantiated. Rendering uses float; the
-// differentiable estimators add their AD types here.
-#define PENUMBRA_FOR_EACH_SCALAR(X) X(float)
-
 template <typename T> inline T sqr(const T& x) { return x * x; }
 template <typename T> inline T safe_sqrt(const T& x) {
     using std::sqrt;

@@ -32,7 +32,7 @@ void DirectIntegrator::sample(const Scene& scene, Sampler& sampler, const Ray& r
     Color3f L(0.f);
     const SurfaceInteraction3f si = scene.intersect(ray);
     if (!hide_emitters_)
-        for_each_emitter_hit(scene, Interaction3f(), ray.d, si, [&](const Color3f& Le, float) { L += Le; });
+        for_each_emitter_hit(scene, Interaction3f(), ray.d, si, [&](const Emitter*, const Color3f& Le, float) { L += Le; });
     const BSDF* bsdf = si.is_valid() ? si.bsdf() : nullptr;
     if (!bsdf) {
         out[0] = L;
@@ -58,7 +58,7 @@ void DirectIntegrator::sample(const Scene& scene, Sampler& sampler, const Ray& r
         const SurfaceInteraction3f si2 = scene.intersect(si.spawn_ray(d));
         ++rays.rays;
         const bool delta = (bs.sampled_type & BSDFDelta) != 0;
-        for_each_emitter_hit(scene, si, d, si2, [&](const Color3f& Le, float emitter_pdf) {
+        for_each_emitter_hit(scene, si, d, si2, [&](const Emitter*, const Color3f& Le, float emitter_pdf) {
             const float w = delta ? 1.f : mis_power(bs.pdf * frac_bsdf, emitter_pdf * frac_lum);
             L += weight * Le * (w / float(bsdf_samples_));
         });

@@ -6,7 +6,7 @@
 
 namespace penumbra {
 
-// Calls visit(radiance, emitter_pdf) for every emitter the ray sees; `si` may be invalid (escaped ray).
+// Calls visit(emitter, radiance, emitter_pdf) for every emitter the ray sees; `si` may be invalid (escaped ray).
 template <typename Visit>
 void for_each_emitter_hit(const Scene& scene, const Interaction3f& from, const Vec3f& d,
                           const SurfaceInteraction3f& si, Visit&& visit) {
@@ -19,7 +19,7 @@ void for_each_emitter_hit(const Scene& scene, const Interaction3f& from, const V
             const Color3f Le = e->eval_environment(d);
             if (is_black(Le)) continue;
             ds.emitter = e.get();
-            visit(Le, scene.pdf_emitter_direction(from, ds));
+            visit(e.get(), Le, scene.pdf_emitter_direction(from, ds));
         }
         return;
     }
@@ -31,7 +31,7 @@ void for_each_emitter_hit(const Scene& scene, const Interaction3f& from, const V
     ds.dist = si.t;
     ds.emitter = emitter;
     const Color3f Le = emitter->eval(si);
-    if (!is_black(Le)) visit(Le, scene.pdf_emitter_direction(from, ds));
+    if (!is_black(Le)) visit(emitter, Le, scene.pdf_emitter_direction(from, ds));
 }
 
 } // namespace penumbra

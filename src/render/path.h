@@ -1,5 +1,6 @@
 #pragma once
 #include "render/integrator.h"
+#include "render/path_tracer.h"
 
 namespace penumbra {
 
@@ -7,10 +8,10 @@ class PathIntegrator final : public SamplingIntegrator {
 public:
     explicit PathIntegrator(const Properties& props);
     void sample(const Scene& scene, Sampler& sampler, const Ray& ray, Color3f* out, RayCounter& rays) const override;
+    const PathSettings& settings() const { return settings_; }
 
 private:
-    int max_depth_ = -1, rr_depth_ = 5;
-    bool hide_emitters_ = false;
+    PathSettings settings_;
 };
 
 } // namespace penumbra

@@ -1,12 +1,7 @@
 #include "render/integrator.h"
+#include "render/tiles.h"
 
-#include <tbb/blocked_range2d.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
-#include <atomic>
 #include <chrono>
-#include <mutex>
 
 namespace penumbra {
 
@@ -22,58 +17,39 @@ std::vector<Layer> SamplingIntegrator::render(const Scene& scene, const RenderOp
     const size_t n_layers = names.size();
     std::vector<Layer> layers;
     for (const auto& name : names) layers.push_back({name, Image(width, height)});
-
-    constexpr int tile = 16;
-    const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
     std::atomic<uint64_t> rays{0}, dropped{0};
-    std::atomic<int> tiles_done{0};
-    std::mutex progress_mutex;
     const auto start = std::chrono::steady_clock::now();
 
-    auto body = [&](const tbb::blocked_range2d<int>& range) {
+    for_each_tile(width, height, options.threads, [&](int x0, int y0, int x1, int y1) {
         Sampler sampler;
         RayCounter counter;
         std::vector<Color3f> value(n_layers), sum(n_layers);
         uint64_t local_dropped = 0;
-        for (int ty = range.rows().begin(); ty < range.rows().end(); ++ty)
-            for (int tx = range.cols().begin(); tx < range.cols().end(); ++tx) {
-                for (int y = ty * tile; y < std::min(height, (ty + 1) * tile); ++y)
-                    for (int x = tx * tile; x < std::min(width, (tx + 1) * tile); ++x) {
-                        const uint64_t pixel = uint64_t(y) * width + x;
-                        std::fill(sum.begin(), sum.end(), Color3f(0.f));
-                        for (int s = 0; s < spp; ++s) {
-                            sampler.start(options.seed, pixel, uint64_t(s));
-                            // Filter importance sampling: the pixel estimate is ∫ f(x - x_j) L(x) dx with f normalized.
-                            const Vec2f offset = film.rfilter->sample(sampler.next_2d());
-                            const Vec2f pos(x + 0.5f + offset.x, y + 0.5f + offset.y);
-                            const auto [ray, weight] = sensor.sample_ray(pos, sampler.next_2d());
-                            ++counter.rays;
-                            sample(scene, sampler, ray, value.data(), counter);
-                            bool finite = true;
-                            for (auto& v : value) finite = finite && is_finite(v);
-                            if (!finite) {
-                                ++local_dropped;
-                                continue;
-                            }
-                            for (size_t l = 0; l < n_layers; ++l) sum[l] += value[l] * weight;
-                        }
-                        for (size_t l = 0; l < n_layers; ++l) layers[l].image.at(x, y) = sum[l] / float(spp);
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                const uint64_t pixel = uint64_t(y) * width + x;
+                std::fill(sum.begin(), sum.end(), Color3f(0.f));
+                for (int s = 0; s < spp; ++s) {
+                    sampler.start(options.seed, pixel, uint64_t(s));
+                    // Filter importance sampling: the pixel estimate is ∫ f(x - x_j) L(x) dx with f normalized.
+                    const Vec2f offset = film.rfilter->sample(sampler.next_2d());
+                    const Vec2f pos(x + 0.5f + offset.x, y + 0.5f + offset.y);
+                    const auto [ray, weight] = sensor.sample_ray(pos, sampler.next_2d());
+                    ++counter.rays;
+                    sample(scene, sampler, ray, value.data(), counter);
+                    bool finite = true;
+                    for (auto& v : value) finite = finite && is_finite(v);
+                    if (!finite) {
+                        ++local_dropped;
+                        continue;
                     }
-                const int done = ++tiles_done;
-                if (options.progress) {
-                    std::lock_guard<std::mutex> lock(progress_mutex);
-                    options.progress(float(done) / float(tiles_x * tiles_y));
+                    for (size_t l = 0; l < n_layers; ++l) sum[l] += value[l] * weight;
                 }
+                for (size_t l = 0; l < n_layers; ++l) layers[l].image.at(x, y) = sum[l] / float(spp);
             }
         rays += counter.rays;
         dropped += local_dropped;
-    };
-
-    const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-        tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), body);
-    });
+    }, options.progress);
 
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     stats.samples = uint64_t(width) * height * spp;

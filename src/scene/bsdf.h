@@ -3,6 +3,7 @@
 // eval()/pdf() are templated on the scalar type (one physics code path for rendering and derivatives);
 // sampling is done on detached (float) values.
 #pragma once
+#include "core/scalar.h"
 #include "scene/interaction.h"
 #include "scene/object.h"
 

@@ -1,5 +1,6 @@
 // Emitter interface: area, point, spot, directional, constant (environment) and envmap lights.
 #pragma once
+#include "core/scalar.h"
 #include "scene/interaction.h"
 #include "scene/object.h"
 
@@ -41,7 +42,9 @@ public:
     /* Radiance leaving a surface emitter at si toward si.wi (local); zero on the back side. */              \
     virtual Color3<T> eval(const SurfaceInteraction<T>& si) const = 0;                                       \
     /* Radiance arriving from an infinite emitter along a ray whose world direction is d (escaped rays). */  \
-    virtual Color3<T> eval_environment(const Vec3<T>& d) const = 0;
+    virtual Color3<T> eval_environment(const Vec3<T>& d) const = 0;                                         \
+    /* Delta emitters: the incident term at point p (point/spot: I(ω)/|p - x_src|², directional: E). */      \
+    virtual Color3<T> eval_delta(const Vec3<T>& p) const = 0;
     PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_EMITTER_METHODS)
 #undef PENUMBRA_EMITTER_METHODS
 
@@ -58,7 +61,8 @@ protected:
     BoundingSphere scene_bounds_;
 };
 
-// CRTP helper: an emitter implements `pdf_direction_t`, `eval_t` and `eval_environment_t` as templates.
+// CRTP helper: an emitter implements `pdf_direction_t`, `eval_t` and `eval_environment_t` as templates, and
+// delta emitters `eval_delta_t`.
 template <typename Derived> class EmitterBase : public Emitter {
 public:
 #define PENUMBRA_EMITTER_IMPL(T)                                                                             \
@@ -70,6 +74,12 @@ public:
     }                                                                                                        \
     Color3<T> eval_environment(const Vec3<T>& d) const override {                                           \
         return static_cast<const Derived*>(this)->template eval_environment_t<T>(d);                         \
+    }                                                                                                        \
+    Color3<T> eval_delta(const Vec3<T>& p) const override {                                                 \
+        if constexpr (requires(const Derived& e) { e.template eval_delta_t<T>(p); })                         \
+            return static_cast<const Derived*>(this)->template eval_delta_t<T>(p);                           \
+        else                                                                                                 \
+            return Color3<T>(T(0));                                                                          \
     }
     PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_EMITTER_IMPL)
 #undef PENUMBRA_EMITTER_IMPL

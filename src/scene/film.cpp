@@ -25,9 +25,6 @@ namespace penumbra {
 // Bins of the tabulated 1D CDF used by sample(); the profile is piecewise constant on them.
 static constexpr int FilterTableSize = 1024;
 
-float ReconstructionFilter::eval_normalized(const Vec2f& offset) const {
-    return eval(offset.x) * eval(offset.y) / (integral_ * integral_);
-}
 
 // Midpoint-rule tabulation of the profile on [-r, r]; the CDF is normalized so that cdf_.back() == 1.
 void ReconstructionFilter::init_sampling() {
@@ -73,32 +70,43 @@ std::string Film::to_string() const {
 
 namespace {
 
-class BoxFilter final : public ReconstructionFilter {
+class BoxFilter final : public FilterBase<BoxFilter> {
   public:
     BoxFilter() {
         radius_ = 0.5f;
         init_sampling();
     }
-    float eval(float x) const override { return std::abs(x) <= radius_ ? 1.f : 0.f; }
+    template <typename T> T eval_t(const T& x) const {
+        using std::abs;
+        return T(abs(x) <= T(radius_) ? 1.f : 0.f);
+    }
 };
 
-class TentFilter final : public ReconstructionFilter {
+class TentFilter final : public FilterBase<TentFilter> {
   public:
     explicit TentFilter(float radius) {
         radius_ = radius;
         init_sampling();
     }
-    float eval(float x) const override { return std::max(0.f, 1.f - std::abs(x) / radius_); }
+    template <typename T> T eval_t(const T& x) const {
+        using std::abs;
+        const T v = T(1.f) - abs(x) / T(radius_);
+        return v > T(0.f) ? v : T(0.f);
+    }
 };
 
-class GaussianFilter final : public ReconstructionFilter {
+class GaussianFilter final : public FilterBase<GaussianFilter> {
   public:
     explicit GaussianFilter(float stddev) : alpha_(-1.f / (2.f * stddev * stddev)) {
         radius_ = 4.f * stddev;
         bias_ = std::exp(alpha_ * radius_ * radius_);
         init_sampling();
     }
-    float eval(float x) const override { return std::max(0.f, std::exp(alpha_ * x * x) - bias_); }
+    template <typename T> T eval_t(const T& x) const {
+        using std::exp;
+        const T v = exp(T(alpha_) * x * x) - T(bias_);
+        return v > T(0.f) ? v : T(0.f);
+    }
 
   private:
     float alpha_, bias_ = 0.f;

@@ -1,7 +1,8 @@
 // Film (hdrfilm) and pixel reconstruction filters (box, tent, gaussian) with Mitsuba 3's parameters.
 #pragma once
-#include "scene/object.h"
+#include "core/scalar.h"
 #include "core/vector.h"
+#include "scene/object.h"
 
 #include <memory>
 #include <vector>
@@ -12,10 +13,14 @@ class ReconstructionFilter : public Object {
 public:
     ObjectKind kind() const override { return ObjectKind::RFilter; }
     float radius() const { return radius_; }
-    // Separable 1D filter profile (not normalized), zero beyond radius().
-    virtual float eval(float x) const = 0;
+    // Separable 1D filter profile (not normalized), zero beyond radius(); templated for the filter derivative.
+#define PENUMBRA_FILTER_METHODS(T) virtual T eval(const T& x) const = 0;
+    PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_FILTER_METHODS)
+#undef PENUMBRA_FILTER_METHODS
     // 2D filter value f(x) f(y) normalized to integrate to 1 over the plane.
-    float eval_normalized(const Vec2f& offset) const;
+    template <typename T> T eval_normalized(const Vec2<T>& offset) const {
+        return eval(offset.x) * eval(offset.y) / T(integral_ * integral_);
+    }
     // Offset in pixels distributed proportionally to the (normalized, non-negative) filter.
     Vec2f sample(const Vec2f& u) const;
 
@@ -27,6 +32,15 @@ private:
     std::vector<float> cdf_;
     std::vector<int> guide_;
     float integral_ = 1.f;
+};
+
+// CRTP helper: a filter implements `template <typename T> T eval_t(const T& x) const`.
+template <typename Derived> class FilterBase : public ReconstructionFilter {
+public:
+#define PENUMBRA_FILTER_IMPL(T)                                                                              \
+    T eval(const T& x) const override { return static_cast<const Derived*>(this)->template eval_t<T>(x); }
+    PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_FILTER_IMPL)
+#undef PENUMBRA_FILTER_IMPL
 };
 
 class Film : public Object {

@@ -54,6 +54,9 @@ template <typename T> struct PositionSample {
     Vec2<T> uv;
     T pdf = T(0);
     bool delta = false;
+    // The material point sampled on a mesh (triangle and barycentrics), for re-evaluation in material form.
+    uint32_t prim = 0;
+    Vec2f bary;
 };
 
 // A sampled point seen from a reference point. `d` is the unit direction from the reference to `p`, `dist`

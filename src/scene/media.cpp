@@ -40,9 +40,8 @@ std::shared_ptr<Object> make_medium(const Properties& props, const LoadContext& 
     auto medium = std::make_shared<Medium>();
     medium->albedo = props.get_color("albedo", Color3f(0.75f));
     medium->sigma_t = props.get_color("sigma_t", Color3f(1.f)) * props.get_float("scale", 1.f);
-    // Both flags only change the estimator's efficiency, not its expectation, in RGB rendering: accepted as
-    // no-ops.
-    props.get_bool("sample_emitters", true);
+    medium->sample_emitters = props.get_bool("sample_emitters", true);
+    // Only changes the estimator's efficiency, not its expectation, in RGB rendering: accepted as a no-op.
     props.get_bool("has_spectral_extinction", true);
     if (min_component(medium->sigma_t) < 0.f)
         props.raise("sigma_t", "the extinction 'sigma_t' must be non-negative");

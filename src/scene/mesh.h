@@ -10,16 +10,21 @@ namespace penumbra {
 
 struct TriangleMesh {
     std::vector<Vec3f> positions;
-    std::vector<Vec3f> normals; // per-vertex shading normals (empty: use face normals)
-    std::vector<Vec2f> uvs;     // per-vertex texture coordinates (empty: uv = barycentrics)
+    std::vector<Vec3f> normals;    // per-vertex shading normals (empty: use face normals)
+    std::vector<Vec2f> uvs;        // per-vertex texture coordinates (empty: uv = barycentrics)
     std::vector<uint32_t> indices; // 3 per triangle
 
     size_t vertex_count() const { return positions.size(); }
     size_t face_count() const { return indices.size() / 3; }
     void apply_transform(const Transform& to_world); // positions, normals (renormalized)
-    // Throws Error(context + ...) on out-of-range indices, non-finite data or attribute count mismatch.
+    // Throws penumbra::Error("<context>: <what is wrong>") on out-of-range indices, non-finite data,
+    // attribute count mismatch or an empty mesh.
     void validate(const std::string& context) const;
 };
+
+// Smooth vertex normals (replacing any present): the angle-weighted sum of the incident face normals, as
+// Mitsuba 3 computes them for meshes loaded without normals.
+void recompute_vertex_normals(TriangleMesh& mesh);
 
 // Loaders; every error names the file (and line for text formats).
 TriangleMesh load_obj(const std::string& path);
@@ -28,9 +33,9 @@ TriangleMesh load_ply(const std::string& path);
 TriangleMesh load_serialized(const std::string& path, int shape_index);
 
 // Tessellated primitives in their Mitsuba 3 canonical frames.
-TriangleMesh make_rectangle_mesh();       // [-1,1]^2 at z=0, normal +z
-TriangleMesh make_cube_mesh();            // [-1,1]^3, outward normals, 24 vertices
-TriangleMesh make_disk_mesh(int segments);  // unit disk at z=0, normal +z
+TriangleMesh make_rectangle_mesh();        // [-1,1]^2 at z=0, normal +z
+TriangleMesh make_cube_mesh();             // [-1,1]^3, outward normals, 24 vertices
+TriangleMesh make_disk_mesh(int segments); // unit disk at z=0, normal +z
 TriangleMesh make_sphere_mesh(const Vec3f& center, float radius, int rings, int segments);
 
 } // namespace penumbra

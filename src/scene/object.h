@@ -11,9 +11,24 @@ enum class ObjectKind { Shape, BSDF, Texture, Emitter, Sensor, Film, RFilter, Sa
 
 const char* kind_name(ObjectKind kind); // XML tag name: "shape", "bsdf", ...
 
+class Object;
+
+// Receives an object's differentiable parameters (Mitsuba 3's traverse()). Names are relative to the object.
+class ParamVisitor {
+public:
+    virtual ~ParamVisitor() = default;
+    // `size` floats at `values`; the object evaluates them through `*index` (first parameter index, -1 when
+    // not differentiated; see core/param.h). `geometry` marks values that change the BVH (vertex positions).
+    virtual void put(const std::string& name, float* values, int size, int* index, bool geometry = false) = 0;
+    // A nested object (texture, BSDF, emitter) whose own parameters are named `name.<param>`.
+    virtual void put_object(const std::string& name, Object* object) = 0;
+};
+
 class Object {
 public:
     virtual ~Object() = default;
+    // Lists the differentiable parameters; objects without any keep the default.
+    virtual void traverse(ParamVisitor&) {}
     virtual ObjectKind kind() const = 0;
     virtual std::string to_string() const { return std::string(kind_name(kind())) + "[" + plugin + "]"; }
     std::string id;       // the XML `id` attribute (may be empty)

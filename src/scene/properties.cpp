@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 namespace penumbra {
 
 namespace {
 const char* tag_name(size_t index) {
-    static const char* names[] = {"float", "integer", "boolean", "string", "rgb", "point/vector", "transform", "object"};
+    static const char* names[] = {"float", "integer",      "boolean",   "string",
+                                  "rgb",   "point/vector", "transform", "object"};
     return index < 8 ? names[index] : "?";
 }
 } // namespace
@@ -47,8 +49,8 @@ const Properties::Entry* Properties::find(const std::string& name) const {
 
 void Properties::type_error(const std::string& name, const char* expected) const {
     const Entry* e = find(name);
-    throw LoadError(e ? e->loc : location_, "parameter '" + name + "' of " + plugin_ + ": expected " + expected +
-                                                 ", got " + tag_name(e ? e->value.index() : 99));
+    throw LoadError(e ? e->loc : location_, "parameter '" + name + "' of " + plugin_ + ": expected " +
+                                                expected + ", got " + tag_name(e ? e->value.index() : 99));
 }
 
 void Properties::raise(const std::string& name, const std::string& message) const {
@@ -59,6 +61,22 @@ static LoadError missing(const Properties& p, const std::string& name) {
     return LoadError(p.location(), p.plugin() + ": missing required parameter '" + name + "'");
 }
 
+// type() reads the Tag off the variant's index: both list the alternatives in the same order.
+template <Properties::Tag tag, typename T>
+constexpr bool tag_is = std::is_same_v<std::variant_alternative_t<size_t(tag), Properties::Value>, T>;
+static_assert(std::variant_size_v<Properties::Value> == 8);
+static_assert(tag_is<Properties::Tag::Float, double> && tag_is<Properties::Tag::Integer, int64_t> &&
+              tag_is<Properties::Tag::Boolean, bool> && tag_is<Properties::Tag::String, std::string> &&
+              tag_is<Properties::Tag::Color, ColorValue> && tag_is<Properties::Tag::Vector, Vec3f> &&
+              tag_is<Properties::Tag::Transform, Transform> &&
+              tag_is<Properties::Tag::Object, std::shared_ptr<Object>>);
+
+Properties::Tag Properties::type(const std::string& name) const {
+    const auto it = values_.find(name);
+    if (it == values_.end()) throw missing(*this, name);
+    return Tag(it->second.value.index());
+}
+
 float Properties::get_float(const std::string& name) const {
     const Entry* e = find(name);
     if (!e) throw missing(*this, name);
@@ -66,7 +84,9 @@ float Properties::get_float(const std::string& name) const {
     if (auto i = std::get_if<int64_t>(&e->value)) return float(*i);
     type_error(name, "float");
 }
-float Properties::get_float(const std::string& name, float def) const { return has(name) ? get_float(name) : def; }
+float Properties::get_float(const std::string& name, float def) const {
+    return has(name) ? get_float(name) : def;
+}
 
 int64_t Properties::get_int(const std::string& name) const {
     const Entry* e = find(name);
@@ -74,7 +94,9 @@ int64_t Properties::get_int(const std::string& name) const {
     if (auto i = std::get_if<int64_t>(&e->value)) return *i;
     type_error(name, "integer");
 }
-int64_t Properties::get_int(const std::string& name, int64_t def) const { return has(name) ? get_int(name) : def; }
+int64_t Properties::get_int(const std::string& name, int64_t def) const {
+    return has(name) ? get_int(name) : def;
+}
 
 bool Properties::get_bool(const std::string& name, bool def) const {
     const Entry* e = find(name);
@@ -160,7 +182,8 @@ std::vector<std::string> Properties::unqueried() const {
         if (!e.queried) list.emplace_back(e.order, name);
     std::sort(list.begin(), list.end());
     std::vector<std::string> names;
-    for (auto& [order, name] : list) names.push_back(name);
+    for (auto& [order, name] : list)
+        names.push_back(name);
     return names;
 }
 
@@ -168,8 +191,9 @@ void Properties::check_all_queried(const std::string& what) const {
     for (const std::string& name : unqueried()) {
         const Entry& e = values_.at(name);
         if (auto o = std::get_if<std::shared_ptr<Object>>(&e.value))
-            throw LoadError(e.loc, what + " does not accept a nested " + kind_name((*o)->kind()) +
-                                       (name.rfind("_arg_", 0) == 0 ? std::string() : " named '" + name + "'"));
+            throw LoadError(e.loc,
+                            what + " does not accept a nested " + kind_name((*o)->kind()) +
+                                (name.rfind("_arg_", 0) == 0 ? std::string() : " named '" + name + "'"));
         throw LoadError(e.loc, "unknown parameter '" + name + "' of " + what);
     }
 }

@@ -20,13 +20,16 @@ struct ColorValue {
 };
 
 class Properties {
-public:
-    // float, integer, boolean, string, rgb/spectrum (ColorValue), point/vector (Vec3f), transform, nested object.
-    using Value = std::variant<double, int64_t, bool, std::string, ColorValue, Vec3f, Transform, std::shared_ptr<Object>>;
+  public:
+    // float, integer, boolean, string, rgb/spectrum (ColorValue), point/vector (Vec3f), transform, nested
+    // object.
+    using Value = std::variant<double, int64_t, bool, std::string, ColorValue, Vec3f, Transform,
+                               std::shared_ptr<Object>>;
     enum class Tag { Float, Integer, Boolean, String, Color, Vector, Transform, Object };
 
     Properties() = default;
-    Properties(std::string plugin, SourceLocation loc) : plugin_(std::move(plugin)), location_(std::move(loc)) {}
+    Properties(std::string plugin, SourceLocation loc)
+        : plugin_(std::move(plugin)), location_(std::move(loc)) {}
 
     const std::string& plugin() const { return plugin_; }
     const SourceLocation& location() const { return location_; }
@@ -39,6 +42,9 @@ public:
     void add_object(std::string name, std::shared_ptr<Object> obj, const SourceLocation& loc);
 
     bool has(const std::string& name) const { return values_.count(name) != 0; }
+    // The type of a stored value, for parameters that accept several (e.g. an IOR: a float or a material
+    // name). Does not mark the value as queried; a missing value is a LoadError.
+    Tag type(const std::string& name) const;
 
     // ---- typed getters. Each marks the value as queried; a value of the wrong type is a LoadError.
     float get_float(const std::string& name) const;
@@ -63,7 +69,9 @@ public:
     // All nested objects of a kind, in declaration order (marks them queried).
     std::vector<std::shared_ptr<Object>> objects(ObjectKind kind) const;
     // All nested objects in declaration order (not marked).
-    const std::vector<std::pair<std::string, std::shared_ptr<Object>>>& all_objects() const { return objects_; }
+    const std::vector<std::pair<std::string, std::shared_ptr<Object>>>& all_objects() const {
+        return objects_;
+    }
 
     // Names set but never queried, in declaration order.
     std::vector<std::string> unqueried() const;
@@ -72,7 +80,7 @@ public:
     // Throws "file:line: <what>: <message>" at the location of parameter `name`.
     [[noreturn]] void raise(const std::string& name, const std::string& message) const;
 
-private:
+  private:
     struct Entry {
         Value value;
         SourceLocation loc;

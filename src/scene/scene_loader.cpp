@@ -102,6 +102,7 @@ std::unique_ptr<Scene> build_scene(const XmlScene& xml, const std::string& sourc
     auto scene = std::make_unique<Scene>();
     scene->source_path = source_path;
     Instantiator inst(xml);
+    std::vector<std::pair<const Emitter*, SourceLocation>> top_level_area_emitters;
     for (const XmlChild& child : xml.objects) {
         const std::shared_ptr<Object> obj = inst.instantiate(*child.node);
         switch (obj->kind()) {
@@ -110,9 +111,10 @@ std::unique_ptr<Scene> build_scene(const XmlScene& xml, const std::string& sourc
             break;
         case ObjectKind::Emitter: {
             auto emitter = as<Emitter>(obj, ObjectKind::Emitter);
-            if (emitter->flags() & EmitterSurface)
-                throw LoadError(child.location, "an area emitter must be nested inside the <shape> that emits");
-            scene->emitters.push_back(std::move(emitter));
+            // A top-level area emitter is declared for a shape to <ref> (possibly further down): its shape adds
+            // it to the scene; it is an error only if no shape uses it (checked below).
+            if (emitter->flags() & EmitterSurface) top_level_area_emitters.emplace_back(emitter.get(), child.location);
+            else scene->emitters.push_back(std::move(emitter));
             break;
         }
         case ObjectKind::Sensor:
@@ -133,6 +135,9 @@ std::unique_ptr<Scene> build_scene(const XmlScene& xml, const std::string& sourc
             break; // BSDFs, textures, media, ... declared at the top level for later <ref>s (as in Mitsuba)
         }
     }
+    for (const auto& [emitter, location] : top_level_area_emitters)
+        if (!emitter->shape())
+            throw LoadError(location, "an area emitter must be attached to a shape (nest it in the <shape>, or <ref> it from one)");
     // Every id and alias (all declarations are instantiated by now: each is top-level or nested in one).
     for (const auto& [id, node] : xml.ids)
         scene->named_objects[id] = inst.instantiate(*node);

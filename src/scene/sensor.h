@@ -1,6 +1,7 @@
 // Sensors: perspective (pinhole) and orthographic cameras, Mitsuba 3 conventions
 // (camera looks along local +z, local +x is left, film origin at the top-left corner).
 #pragma once
+#include "core/scalar.h"
 #include "core/transform.h"
 #include "scene/film.h"
 #include "scene/interaction.h"
@@ -32,6 +33,31 @@ public:
     virtual std::pair<DirectionSample3f, Color3f> sample_direction(const Interaction3f& ref, const Vec2f& u) const = 0;
     // Projection of a world point to continuous film coordinates (pixels); false if behind or outside.
     virtual bool project(const Vec3f& p, Vec2f& film_pos) const = 0;
+    // Moves the sensor (recomputes everything derived from to_world).
+    virtual void set_transform(const Transform& to_world) = 0;
+
+#define PENUMBRA_SENSOR_METHODS(T)                                                                           \
+    /* The film position s(p) (pixels, no bounds check) of world point p and the Jacobian |ds/dA| (pixel */   \
+    /* area per unit area) of a surface element at p with normal n; false if p is behind the sensor. */      \
+    virtual bool film_position(const Vec3<T>& p, const Vec3<T>& n, Vec2<T>& film_pos, T& jacobian) const = 0; \
+    /* Unit world direction from p toward the sensor (the direction of the last path segment). */           \
+    virtual Vec3<T> to_sensor(const Vec3<T>& p) const = 0;
+    PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_SENSOR_METHODS)
+#undef PENUMBRA_SENSOR_METHODS
+};
+
+// CRTP helper: a sensor implements `film_position_t` and `to_sensor_t` as templates.
+template <typename Derived, typename Base = Sensor> class SensorBase : public Base {
+public:
+#define PENUMBRA_SENSOR_IMPL(T)                                                                              \
+    bool film_position(const Vec3<T>& p, const Vec3<T>& n, Vec2<T>& film_pos, T& jacobian) const override {  \
+        return static_cast<const Derived*>(this)->template film_position_t<T>(p, n, film_pos, jacobian);    \
+    }                                                                                                        \
+    Vec3<T> to_sensor(const Vec3<T>& p) const override {                                                     \
+        return static_cast<const Derived*>(this)->template to_sensor_t<T>(p);                                \
+    }
+    PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_SENSOR_IMPL)
+#undef PENUMBRA_SENSOR_IMPL
 };
 
 } // namespace penumbra

@@ -1,6 +1,8 @@
 // Shape: area sampling and surface interactions on a world-space triangle mesh (Mitsuba 3 mesh conventions).
 #include "scene/shape.h"
 
+#include "scene/shape_interaction.h"
+
 #include "core/warp.h"
 
 #include <sstream>
@@ -64,53 +66,24 @@ PositionSample3f Shape::sample_position(const Vec2f& u) const {
     ps.n = face_normal(prim);
     ps.uv = mesh.uvs.empty() ? b : interpolate(mesh.uvs, i, b.x, b.y);
     ps.pdf = 1.f / total_area_;
+    ps.prim = prim;
+    ps.bary = b;
     return ps;
 }
 
-// Mitsuba 3 mesh interaction: p from barycentrics, n = face normal, shading normal = normalized interpolated
-// vertex normal, shading tangent s = Gram-Schmidt of dp/du against it, where dp/du solves
-// [p1-p0, p2-p0] = [dp/du, dp/dv] [uv1-uv0, uv2-uv0] (coordinate_system(n) without uvs or when singular).
 SurfaceInteraction3f Shape::compute_surface_interaction(const Ray& ray, float t, uint32_t prim, float b1,
                                                         float b2) const {
-    const uint32_t* i = &mesh.indices[3 * size_t(prim)];
-    const Triangle tri = triangle(mesh, prim);
-    const Vec3f dp0 = tri.p1 - tri.p0, dp1 = tri.p2 - tri.p0;
-
-    SurfaceInteraction3f si;
+    SurfaceInteraction3f si = surface_interaction<float>(*this, prim, Vec2f(b1, b2), MeshVertices{mesh});
     si.t = t;
-    si.p = interpolate(mesh.positions, i, b1, b2);
-    si.n = normalize(cross(dp0, dp1));
-    si.bary = Vec2f(b1, b2);
-    si.shape = this;
-    si.prim_index = prim;
-
-    Vec3f dp_du, dp_dv;
-    coordinate_system(si.n, dp_du, dp_dv);
-    if (mesh.uvs.empty()) {
-        si.uv = Vec2f(b1, b2);
-    } else {
-        si.uv = interpolate(mesh.uvs, i, b1, b2);
-        const Vec2f duv0 = mesh.uvs[i[1]] - mesh.uvs[i[0]], duv1 = mesh.uvs[i[2]] - mesh.uvs[i[0]];
-        const float det = duv0.x * duv1.y - duv0.y * duv1.x;
-        if (det != 0.f) dp_du = (dp0 * duv1.y - dp1 * duv0.y) / det;
-    }
-
-    Vec3f ns = si.n;
-    if (!face_normals && !mesh.normals.empty()) {
-        const Vec3f interpolated = interpolate(mesh.normals, i, b1, b2);
-        const float length = norm(interpolated);
-        if (length > 0.f && std::isfinite(length)) ns = interpolated / length;
-    }
-    const Vec3f s = dp_du - ns * dot(ns, dp_du);
-    const float s_length = norm(s);
-    if (s_length > 0.f && std::isfinite(s_length)) {
-        const Vec3f s_unit = s / s_length;
-        si.sh_frame = Frame3f(s_unit, cross(ns, s_unit), ns);
-    } else {
-        si.sh_frame = Frame3f(ns);
-    }
     si.wi = si.to_local(-ray.d);
     return si;
+}
+
+void Shape::traverse(ParamVisitor& v) {
+    if (!mesh.positions.empty()) v.put("vertex_positions", &mesh.positions[0].x, int(3 * mesh.vertex_count()),
+                                       &vertex_param_index, true);
+    if (bsdf) v.put_object("bsdf", bsdf.get());
+    if (emitter) v.put_object("emitter", emitter.get());
 }
 
 std::string Shape::to_string() const {

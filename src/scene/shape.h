@@ -22,6 +22,10 @@ public:
     std::shared_ptr<Emitter> emitter; // area emitter, or null
     std::shared_ptr<Medium> interior, exterior;
     bool face_normals = false;        // ignore per-vertex normals
+    int vertex_param_index = -1;      // first parameter index of vertex_positions when differentiated
+
+    // `vertex_positions` (geometry), and the nested bsdf and emitter.
+    void traverse(ParamVisitor& v) override;
 
     // Validates the mesh and builds the area distribution. Degenerate (zero-area) triangles are kept in the
     // mesh but never sampled; `degenerate_count` reports them. A mesh with zero total area is an error.

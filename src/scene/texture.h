@@ -1,5 +1,6 @@
 // Textures: spatially varying parameters evaluated at surface interactions.
 #pragma once
+#include "core/scalar.h"
 #include "scene/interaction.h"
 #include "scene/object.h"
 

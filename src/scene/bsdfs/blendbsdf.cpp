@@ -43,6 +43,12 @@ public:
         return bsdf_[0]->eval_diffuse_reflectance(si) * (1.f - w) + bsdf_[1]->eval_diffuse_reflectance(si) * w;
     }
 
+    void traverse(ParamVisitor& v) override {
+        v.put_object("weight", weight_.get());
+        v.put_object("bsdf_0", bsdf_[0].get());
+        v.put_object("bsdf_1", bsdf_[1].get());
+    }
+
 private:
     template <typename T> T weight(const SurfaceInteraction<T>& si) const { return clamp(weight_->eval_1(si), 0.f, 1.f); }
     TexturePtr weight_;

@@ -53,10 +53,36 @@ BSDFPtr load_null_bsdf(const Properties& props);
 float lookup_ior(const Properties& props, const std::string& name, const std::string& default_name);
 // Relative IOR int_ior / ext_ior with Mitsuba's checks (positive and different).
 float relative_ior(const Properties& props, const std::string& default_int);
+// `distribution`: "beckmann" (default) or "ggx".
+MicrofacetType parse_distribution(const Properties& props);
 // `distribution`, `alpha` / `alpha_u`, `alpha_v` (textures) and `sample_visible`.
 RoughnessParams parse_roughness(const Properties& props);
+// The parameters of the smooth and thin dielectrics: relative IOR (interior default "bk7"),
+// `specular_reflectance` and `specular_transmittance` (default 1).
+struct DielectricParams {
+    float eta;
+    TexturePtr specular_reflectance, specular_transmittance;
+};
+DielectricParams parse_dielectric(const Properties& props);
+// The coating and base parameters of plastic and roughplastic: relative IOR (interior default
+// "polypropylene"), `specular_reflectance` (1), `diffuse_reflectance` (0.5) and `nonlinear` (false).
+struct PlasticParams {
+    float eta;
+    TexturePtr specular_reflectance, diffuse_reflectance;
+    bool nonlinear;
+};
+PlasticParams parse_plastic(const Properties& props);
 // Conductor `material` (named, e.g. "Au") or explicit `eta` / `k` (defaults 0 / 1: a perfect mirror).
 void parse_conductor_ior(const Properties& props, TexturePtr& eta, TexturePtr& k);
+// Lists the roughness textures: "alpha" when isotropic (one texture), else "alpha_u" and "alpha_v".
+inline void traverse_roughness(ParamVisitor& v, const RoughnessParams& r) {
+    if (r.alpha_u == r.alpha_v) {
+        v.put_object("alpha", r.alpha_u.get());
+    } else {
+        v.put_object("alpha_u", r.alpha_u.get());
+        v.put_object("alpha_v", r.alpha_v.get());
+    }
+}
 // Nested BSDF children in declaration order.
 std::vector<BSDFPtr> nested_bsdfs(const Properties& props);
 

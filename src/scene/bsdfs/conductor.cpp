@@ -30,6 +30,12 @@ public:
         return {bs, specular_->eval(si) * fresnel_conductor(si.wi.z, eta_->eval(si), k_->eval(si))};
     }
 
+    void traverse(ParamVisitor& v) override {
+        v.put_object("eta", eta_.get());
+        v.put_object("k", k_.get());
+        v.put_object("specular_reflectance", specular_.get());
+    }
+
 private:
     TexturePtr eta_, k_, specular_;
 };

@@ -41,6 +41,11 @@ public:
         return {bs, transmittance_->eval(si) * scale};
     }
 
+    void traverse(ParamVisitor& v) override {
+        v.put_object("specular_reflectance", reflectance_.get());
+        v.put_object("specular_transmittance", transmittance_.get());
+    }
+
 private:
     float eta_;
     TexturePtr reflectance_, transmittance_;
@@ -51,9 +56,8 @@ BSDFPtr make_dielectric(float eta, TexturePtr specular_reflectance, TexturePtr s
 }
 
 BSDFPtr load_dielectric(const Properties& props) {
-    const float eta = relative_ior(props, "bk7");
-    return make_dielectric(eta, props.get_texture("specular_reflectance", Color3f(1.f)),
-                           props.get_texture("specular_transmittance", Color3f(1.f)));
+    const DielectricParams p = parse_dielectric(props);
+    return make_dielectric(p.eta, p.specular_reflectance, p.specular_transmittance);
 }
 
 } // namespace penumbra

@@ -32,6 +32,10 @@ public:
     }
     Color3f eval_diffuse_reflectance(const SurfaceInteraction3f& si) const override { return reflectance_->eval(si); }
 
+    void traverse(ParamVisitor& v) override {
+        v.put_object("reflectance", reflectance_.get());
+    }
+
 private:
     TexturePtr reflectance_;
 };

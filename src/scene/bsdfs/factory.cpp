@@ -14,23 +14,25 @@ namespace {
 // Named dielectric IORs of Mitsuba 3 (include/mitsuba/render/ior.h; Hecht, Optics, at ~589 nm).
 const std::map<std::string, float>& ior_table() {
     static const std::map<std::string, float> table = {
-        {"vacuum", 1.0f},        {"helium", 1.000036f},     {"hydrogen", 1.000132f},
-        {"air", 1.000277f},      {"carbon dioxide", 1.00045f}, {"water", 1.3330f},
-        {"acetone", 1.36f},      {"ethanol", 1.361f},       {"carbon tetrachloride", 1.461f},
-        {"glycerol", 1.4729f},   {"benzene", 1.501f},       {"silicone oil", 1.52045f},
-        {"bromine", 1.661f},     {"water ice", 1.31f},      {"fused quartz", 1.458f},
-        {"pyrex", 1.470f},       {"acrylic glass", 1.49f},  {"polypropylene", 1.49f},
-        {"bk7", 1.5046f},        {"sodium chloride", 1.544f}, {"amber", 1.55f},
-        {"pet", 1.5750f},        {"diamond", 2.419f}};
+        {"vacuum", 1.0f},      {"helium", 1.000036f},        {"hydrogen", 1.000132f},
+        {"air", 1.000277f},    {"carbon dioxide", 1.00045f}, {"water", 1.3330f},
+        {"acetone", 1.36f},    {"ethanol", 1.361f},          {"carbon tetrachloride", 1.461f},
+        {"glycerol", 1.4729f}, {"benzene", 1.501f},          {"silicone oil", 1.52045f},
+        {"bromine", 1.661f},   {"water ice", 1.31f},         {"fused quartz", 1.458f},
+        {"pyrex", 1.470f},     {"acrylic glass", 1.49f},     {"polypropylene", 1.49f},
+        {"bk7", 1.5046f},      {"sodium chloride", 1.544f},  {"amber", 1.55f},
+        {"pet", 1.5750f},      {"diamond", 2.419f}};
     return table;
 }
 
 float named_ior(const Properties& props, const std::string& param, std::string name) {
-    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    std::transform(name.begin(), name.end(), name.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
     const auto it = ior_table().find(name);
     if (it != ior_table().end()) return it->second;
     std::string choices;
-    for (const auto& [n, v] : ior_table()) choices += (choices.empty() ? "" : ", ") + n;
+    for (const auto& [n, v] : ior_table())
+        choices += (choices.empty() ? "" : ", ") + n;
     props.raise(param, "unknown IOR \"" + name + "\" (expected a float or one of: " + choices + ")");
 }
 
@@ -38,11 +40,11 @@ float named_ior(const Properties& props, const std::string& param, std::string n
 
 float lookup_ior(const Properties& props, const std::string& name, const std::string& default_name) {
     if (!props.has(name)) return named_ior(props, name, default_name);
-    try {
-        return props.get_float(name);
-    } catch (const LoadError&) {
-        return named_ior(props, name, props.get_string(name));
-    }
+    using Tag = Properties::Tag;
+    const Tag tag = props.type(name);
+    if (tag == Tag::Float || tag == Tag::Integer) return props.get_float(name);
+    // A material name; any other type is reported as "expected string".
+    return named_ior(props, name, props.get_string(name));
 }
 
 float relative_ior(const Properties& props, const std::string& default_int) {
@@ -54,12 +56,17 @@ float relative_ior(const Properties& props, const std::string& default_int) {
     return int_ior / ext_ior;
 }
 
+MicrofacetType parse_distribution(const Properties& props) {
+    const std::string dist = props.get_string("distribution", "beckmann");
+    if (dist == "beckmann") return MicrofacetType::Beckmann;
+    if (dist == "ggx") return MicrofacetType::GGX;
+    props.raise("distribution",
+                "unknown microfacet distribution \"" + dist + "\" (expected \"beckmann\" or \"ggx\")");
+}
+
 RoughnessParams parse_roughness(const Properties& props) {
     RoughnessParams r;
-    const std::string dist = props.get_string("distribution", "beckmann");
-    if (dist == "beckmann") r.type = MicrofacetType::Beckmann;
-    else if (dist == "ggx") r.type = MicrofacetType::GGX;
-    else props.raise("distribution", "unknown microfacet distribution \"" + dist + "\" (expected \"beckmann\" or \"ggx\")");
+    r.type = parse_distribution(props);
     if (props.has("alpha")) {
         if (props.has("alpha_u") || props.has("alpha_v"))
             props.raise("alpha", "specify either \"alpha\" or \"alpha_u\"/\"alpha_v\", not both");
@@ -72,6 +79,23 @@ RoughnessParams parse_roughness(const Properties& props) {
     return r;
 }
 
+DielectricParams parse_dielectric(const Properties& props) {
+    DielectricParams p;
+    p.eta = relative_ior(props, "bk7");
+    p.specular_reflectance = props.get_texture("specular_reflectance", Color3f(1.f));
+    p.specular_transmittance = props.get_texture("specular_transmittance", Color3f(1.f));
+    return p;
+}
+
+PlasticParams parse_plastic(const Properties& props) {
+    PlasticParams p;
+    p.eta = relative_ior(props, "polypropylene");
+    p.specular_reflectance = props.get_texture("specular_reflectance", Color3f(1.f));
+    p.diffuse_reflectance = props.get_texture("diffuse_reflectance", Color3f(0.5f));
+    p.nonlinear = props.get_bool("nonlinear", false);
+    return p;
+}
+
 void parse_conductor_ior(const Properties& props, TexturePtr& eta, TexturePtr& k) {
     const std::string material = props.get_string("material", "none");
     if (props.has("eta") || props.has("k") || material == "none") {
@@ -82,26 +106,33 @@ void parse_conductor_ior(const Properties& props, TexturePtr& eta, TexturePtr& k
     }
     Color3f e, kk;
     if (!conductor_ior(material, e, kk))
-        props.raise("material", "unknown conductor material \"" + material + "\" (expected e.g. Cu, Au, Ag, Al, Cr or none)");
+        props.raise("material", "unknown conductor material \"" + material +
+                                    "\" (expected e.g. Cu, Au, Ag, Al, Cr or none)");
     eta = make_constant_texture(e);
     k = make_constant_texture(kk);
 }
 
 std::vector<BSDFPtr> nested_bsdfs(const Properties& props) {
     std::vector<BSDFPtr> result;
-    for (const auto& obj : props.objects(ObjectKind::BSDF)) result.push_back(std::static_pointer_cast<BSDF>(obj));
+    for (const auto& obj : props.objects(ObjectKind::BSDF))
+        result.push_back(std::static_pointer_cast<BSDF>(obj));
     return result;
 }
 
 std::shared_ptr<Object> make_bsdf(const Properties& props, const LoadContext&) {
     using Loader = BSDFPtr (*)(const Properties&);
-    static const std::map<std::string, Loader> loaders = {
-        {"diffuse", load_diffuse},           {"conductor", load_conductor},
-        {"roughconductor", load_roughconductor}, {"dielectric", load_dielectric},
-        {"roughdielectric", load_roughdielectric}, {"thindielectric", load_thindielectric},
-        {"plastic", load_plastic},           {"roughplastic", load_roughplastic},
-        {"blendbsdf", load_blendbsdf},       {"twosided", load_twosided},
-        {"mask", load_mask},                 {"null", load_null_bsdf}};
+    static const std::map<std::string, Loader> loaders = {{"diffuse", load_diffuse},
+                                                          {"conductor", load_conductor},
+                                                          {"roughconductor", load_roughconductor},
+                                                          {"dielectric", load_dielectric},
+                                                          {"roughdielectric", load_roughdielectric},
+                                                          {"thindielectric", load_thindielectric},
+                                                          {"plastic", load_plastic},
+                                                          {"roughplastic", load_roughplastic},
+                                                          {"blendbsdf", load_blendbsdf},
+                                                          {"twosided", load_twosided},
+                                                          {"mask", load_mask},
+                                                          {"null", load_null_bsdf}};
     const auto it = loaders.find(props.plugin());
     if (it == loaders.end()) throw_unsupported_plugin(props, ObjectKind::BSDF);
     return it->second(props);

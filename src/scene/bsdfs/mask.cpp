@@ -37,6 +37,11 @@ public:
         return nested_->eval_diffuse_reflectance(si);
     }
 
+    void traverse(ParamVisitor& v) override {
+        v.put_object("opacity", opacity_.get());
+        v.put_object("nested_bsdf", nested_.get());
+    }
+
 private:
     template <typename T> T opacity(const SurfaceInteraction<T>& si) const { return clamp(opacity_->eval_1(si), 0.f, 1.f); }
     TexturePtr opacity_;

@@ -57,6 +57,11 @@ public:
     }
     Color3f eval_diffuse_reflectance(const SurfaceInteraction3f& si) const override { return diffuse_->eval(si); }
 
+    void traverse(ParamVisitor& v) override {
+        v.put_object("diffuse_reflectance", diffuse_.get());
+        v.put_object("specular_reflectance", specular_.get());
+    }
+
 private:
     static float luminance_mean(const TexturePtr& t) {
         const Color3f m = t->mean();
@@ -82,10 +87,8 @@ BSDFPtr make_plastic(float eta, TexturePtr diffuse_reflectance, TexturePtr specu
 }
 
 BSDFPtr load_plastic(const Properties& props) {
-    const float eta = relative_ior(props, "polypropylene");
-    TexturePtr specular = props.get_texture("specular_reflectance", Color3f(1.f));
-    TexturePtr diffuse = props.get_texture("diffuse_reflectance", Color3f(0.5f));
-    return make_plastic(eta, diffuse, specular, props.get_bool("nonlinear", false));
+    const PlasticParams p = parse_plastic(props);
+    return make_plastic(p.eta, p.diffuse_reflectance, p.specular_reflectance, p.nonlinear);
 }
 
 } // namespace penumbra

@@ -51,6 +51,13 @@ public:
         return {bs, eval_t<float>(ctx, si, bs.wo) / bs.pdf};
     }
 
+    void traverse(ParamVisitor& v) override {
+        traverse_roughness(v, rough_);
+        v.put_object("eta", eta_.get());
+        v.put_object("k", k_.get());
+        v.put_object("specular_reflectance", specular_.get());
+    }
+
 private:
     template <typename T> MicrofacetDistribution<T> distribution(const SurfaceInteraction<T>& si) const {
         MicrofacetDistribution<T> d;

@@ -86,6 +86,12 @@ public:
         return {bs, eval_t<float>(ctx, si, bs.wo) / bs.pdf};
     }
 
+    void traverse(ParamVisitor& v) override {
+        traverse_roughness(v, rough_);
+        v.put_object("specular_reflectance", reflectance_.get());
+        v.put_object("specular_transmittance", transmittance_.get());
+    }
+
 private:
     // Generalized half vector in the upper hemisphere; false if degenerate or if wi/wo see the back of it.
     template <typename T> static bool half_vector(const Vec3<T>& wi, const Vec3<T>& wo, bool reflect, float eta, Vec3<T>& h) {

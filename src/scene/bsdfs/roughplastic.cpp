@@ -106,6 +106,11 @@ public:
     }
     Color3f eval_diffuse_reflectance(const SurfaceInteraction3f& si) const override { return diffuse_->eval(si); }
 
+    void traverse(ParamVisitor& v) override {
+        v.put_object("diffuse_reflectance", diffuse_.get());
+        v.put_object("specular_reflectance", specular_.get());
+    }
+
 private:
     template <typename T> MicrofacetDistribution<T> distribution() const {
         MicrofacetDistribution<T> d;
@@ -142,20 +147,15 @@ BSDFPtr make_roughplastic(MicrofacetType type, float alpha, bool sample_visible,
 }
 
 BSDFPtr load_roughplastic(const Properties& props) {
-    const std::string dist = props.get_string("distribution", "beckmann");
-    MicrofacetType type = MicrofacetType::Beckmann;
-    if (dist == "ggx") type = MicrofacetType::GGX;
-    else if (dist != "beckmann")
-        props.raise("distribution", "unknown microfacet distribution \"" + dist + "\" (expected \"beckmann\" or \"ggx\")");
+    const MicrofacetType type = parse_distribution(props);
     if (props.has("alpha_u") || props.has("alpha_v"))
         props.raise(props.has("alpha_u") ? "alpha_u" : "alpha_v",
                     "roughplastic does not support anisotropic roughness (use \"alpha\")");
     const float alpha = props.get_float("alpha", 0.1f);
     const bool sample_visible = props.get_bool("sample_visible", true);
-    const float eta = relative_ior(props, "polypropylene");
-    TexturePtr specular = props.get_texture("specular_reflectance", Color3f(1.f));
-    TexturePtr diffuse = props.get_texture("diffuse_reflectance", Color3f(0.5f));
-    return make_roughplastic(type, alpha, sample_visible, eta, diffuse, specular, props.get_bool("nonlinear", false));
+    const PlasticParams p = parse_plastic(props);
+    return make_roughplastic(type, alpha, sample_visible, p.eta, p.diffuse_reflectance,
+                             p.specular_reflectance, p.nonlinear);
 }
 
 } // namespace penumbra

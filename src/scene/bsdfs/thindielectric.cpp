@@ -40,6 +40,11 @@ public:
         return {bs, transmittance_->eval(si)};
     }
 
+    void traverse(ParamVisitor& v) override {
+        v.put_object("specular_reflectance", reflectance_.get());
+        v.put_object("specular_transmittance", transmittance_.get());
+    }
+
 private:
     float eta_;
     TexturePtr reflectance_, transmittance_;
@@ -50,9 +55,8 @@ BSDFPtr make_thindielectric(float eta, TexturePtr specular_reflectance, TextureP
 }
 
 BSDFPtr load_thindielectric(const Properties& props) {
-    const float eta = relative_ior(props, "bk7");
-    return make_thindielectric(eta, props.get_texture("specular_reflectance", Color3f(1.f)),
-                               props.get_texture("specular_transmittance", Color3f(1.f)));
+    const DielectricParams p = parse_dielectric(props);
+    return make_thindielectric(p.eta, p.specular_reflectance, p.specular_transmittance);
 }
 
 } // namespace penumbra

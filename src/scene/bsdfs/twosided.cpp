@@ -33,6 +33,11 @@ public:
         return si.wi.z > 0.f ? front_->eval_diffuse_reflectance(si) : back_->eval_diffuse_reflectance(mirrored(si));
     }
 
+    void traverse(ParamVisitor& v) override {
+        v.put_object("brdf_0", front_.get());
+        if (back_) v.put_object("brdf_1", back_.get());
+    }
+
 private:
     template <typename T> static SurfaceInteraction<T> mirrored(const SurfaceInteraction<T>& si) {
         SurfaceInteraction<T> s = si;

@@ -12,8 +12,8 @@
 // for BSDF sampling and for emitter sampling (a requirement for unbiased MIS); it differs from Mitsuba only at
 // grazing angles on smooth-shaded meshes.
 #include "core/warp.h"
-#include "scene/emitter.h"
-#include "scene/properties.h"
+#include "core/param.h"
+#include "scene/emitters/emitters.h"
 #include "scene/shape.h"
 #include "scene/texture.h"
 
@@ -50,6 +50,8 @@ public:
         ds.p = ps.p;
         ds.n = ps.n;
         ds.uv = ps.uv;
+        ds.prim = ps.prim;
+        ds.bary = ps.bary;
         ds.delta = false;
         ds.emitter = this;
         const Vec3f to_light = ps.p - ref.p;
@@ -100,6 +102,8 @@ public:
         return os.str();
     }
 
+    void traverse(ParamVisitor& v) override { v.put_object("radiance", radiance_.get()); }
+
 private:
     std::shared_ptr<Texture> radiance_;
 };
@@ -110,11 +114,7 @@ std::shared_ptr<Emitter> make_area_emitter(const Properties& props) {
     if (props.has("to_world"))
         props.raise("to_world", "an area light inherits its transform from its parent shape; 'to_world' is not allowed");
     std::shared_ptr<Texture> radiance = props.get_texture("radiance", Color3f(1.f));
-    if (radiance->is_constant()) {
-        const Color3f L = radiance->mean();
-        if (!is_finite(L) || L.x < 0.f || L.y < 0.f || L.z < 0.f)
-            props.raise("radiance", "'radiance' must be finite and non-negative");
-    }
+    if (radiance->is_constant()) check_emission(props, "radiance", radiance->mean());
     return std::make_shared<AreaEmitter>(std::move(radiance));
 }
 

@@ -4,8 +4,7 @@
 // |----------|----------|---------|--------------------------------------|
 // | radiance | spectrum | 1       | emitted radiance (W m^-2 sr^-1)      |
 #include "core/warp.h"
-#include "scene/emitter.h"
-#include "scene/properties.h"
+#include "scene/emitters/emitters.h"
 
 #include <sstream>
 
@@ -73,9 +72,7 @@ private:
 } // namespace
 
 std::shared_ptr<Emitter> make_constant_emitter(const Properties& props) {
-    const Color3f radiance = props.get_color("radiance", Color3f(1.f));
-    if (!is_finite(radiance) || radiance.x < 0.f || radiance.y < 0.f || radiance.z < 0.f)
-        props.raise("radiance", "'radiance' must be finite and non-negative");
+    const Color3f radiance = get_emission(props, "radiance");
     return std::make_shared<ConstantEmitter>(radiance);
 }
 

@@ -6,8 +6,8 @@
 // | direction  | vector    | -        | world direction the light travels in (exclusive with to_world)   |
 // | to_world   | transform | identity | emitter-to-world transform; the light travels along local +z      |
 #include "core/warp.h"
-#include "scene/emitter.h"
-#include "scene/properties.h"
+#include "core/param.h"
+#include "scene/emitters/emitters.h"
 
 #include <sstream>
 
@@ -66,7 +66,12 @@ public:
         return os.str();
     }
 
+    // Eq. 27 of paper 001: the irradiance E arriving along the light's direction (visibility is tested apart).
+    template <typename T> Color3<T> eval_delta_t(const Vec3<T>&) const { return param_color<T>(irradiance_, index_); }
+    void traverse(ParamVisitor& v) override { v.put("irradiance", &irradiance_.x, 3, &index_); }
+
 private:
+    int index_ = -1;
     Vec3f d_; // unit world direction of propagation
     Color3f irradiance_;
 };
@@ -79,9 +84,7 @@ std::shared_ptr<Emitter> make_directional_emitter(const Properties& props) {
     const Vec3f d = props.has("direction") ? props.get_vector("direction")
                                            : props.get_transform("to_world").apply_vector(Vec3f(0.f, 0.f, 1.f));
     if (!(norm(d) > 0.f)) props.raise(props.has("direction") ? "direction" : "to_world", "the light direction is zero");
-    const Color3f irradiance = props.get_color("irradiance", Color3f(1.f));
-    if (!is_finite(irradiance) || irradiance.x < 0.f || irradiance.y < 0.f || irradiance.z < 0.f)
-        props.raise("irradiance", "'irradiance' must be finite and non-negative");
+    const Color3f irradiance = get_emission(props, "irradiance");
     return std::make_shared<DirectionalEmitter>(normalize(d), irradiance);
 }
 

@@ -20,8 +20,7 @@
 #include "core/distribution.h"
 #include "core/image.h"
 #include "core/warp.h"
-#include "scene/emitter.h"
-#include "scene/factory.h"
+#include "scene/emitters/emitters.h"
 
 #include <memory>
 #include <sstream>
@@ -204,7 +203,6 @@ private:
 
 } // namespace
 
-// In-memory construction (also used by tests). Throws Error for an unusable image.
 std::shared_ptr<Emitter> make_envmap_emitter(Image image, float scale, const Transform& to_world,
                                              bool mis_compensation) {
     if (image.width < 2 || image.height < 3)

@@ -1,15 +1,33 @@
-// make_emitter: Mitsuba 3 emitter plugins by `type`. Each maker lives in the plugin's own file.
-#include "scene/emitter.h"
-#include "scene/factory.h"
+// make_emitter: Mitsuba 3 emitter plugins by `type`, and the helpers shared by the plugins. Each maker lives
+// in the plugin's own file.
+#include "scene/emitters/emitters.h"
 
 namespace penumbra {
 
-std::shared_ptr<Emitter> make_area_emitter(const Properties& props);
-std::shared_ptr<Emitter> make_point_emitter(const Properties& props);
-std::shared_ptr<Emitter> make_spot_emitter(const Properties& props);
-std::shared_ptr<Emitter> make_directional_emitter(const Properties& props);
-std::shared_ptr<Emitter> make_constant_emitter(const Properties& props);
-std::shared_ptr<Emitter> make_envmap_emitter(const Properties& props, const LoadContext& ctx);
+void check_emission(const Properties& props, const std::string& name, const Color3f& value) {
+    if (!is_finite(value) || value.x < 0.f || value.y < 0.f || value.z < 0.f)
+        props.raise(name, "'" + name + "' must be finite and non-negative");
+}
+
+Color3f get_emission(const Properties& props, const std::string& name) {
+    const Color3f value = props.get_color(name, Color3f(1.f));
+    check_emission(props, name, value);
+    return value;
+}
+
+DirectionSample3f delta_position_sample(const Emitter* emitter, const Vec3f& position,
+                                        const Interaction3f& ref) {
+    DirectionSample3f ds;
+    ds.p = position;
+    ds.n = Vec3f(0.f);
+    ds.pdf = 1.f;
+    ds.delta = true;
+    ds.emitter = emitter;
+    const Vec3f to_light = position - ref.p;
+    ds.dist = norm(to_light);
+    ds.d = to_light / ds.dist;
+    return ds;
+}
 
 std::shared_ptr<Object> make_emitter(const Properties& props, const LoadContext& ctx) {
     const std::string& type = props.plugin();

@@ -6,8 +6,8 @@
 // | position  | point     | (0,0,0)  | light position (exclusive with to_world)             |
 // | to_world  | transform | identity | emitter-to-world transform; the light sits at its origin |
 #include "core/warp.h"
-#include "scene/emitter.h"
-#include "scene/properties.h"
+#include "core/param.h"
+#include "scene/emitters/emitters.h"
 
 #include <sstream>
 
@@ -23,15 +23,7 @@ public:
 
     // Delta position: the "pdf" is the discrete probability 1, weight = I / dist^2.
     std::pair<DirectionSample3f, Color3f> sample_direction(const Interaction3f& ref, const Vec2f&) const override {
-        DirectionSample3f ds;
-        ds.p = position_;
-        ds.n = Vec3f(0.f);
-        ds.pdf = 1.f;
-        ds.delta = true;
-        ds.emitter = this;
-        const Vec3f to_light = position_ - ref.p;
-        ds.dist = norm(to_light);
-        ds.d = to_light / ds.dist;
+        const DirectionSample3f ds = delta_position_sample(this, position_, ref);
         return {ds, intensity_ / (ds.dist * ds.dist)};
     }
 
@@ -52,7 +44,14 @@ public:
         return os.str();
     }
 
+    // Eq. 24 of paper 001: the point light's incident term I / |p - x_src|² at p.
+    template <typename T> Color3<T> eval_delta_t(const Vec3<T>& p) const {
+        return param_color<T>(intensity_, index_) / squared_norm(Vec3<T>(position_) - p);
+    }
+    void traverse(ParamVisitor& v) override { v.put("intensity", &intensity_.x, 3, &index_); }
+
 private:
+    int index_ = -1;
     Vec3f position_;
     Color3f intensity_;
 };
@@ -64,9 +63,7 @@ std::shared_ptr<Emitter> make_point_emitter(const Properties& props) {
         props.raise("position", "only one of 'position' and 'to_world' can be specified");
     const Vec3f position = props.has("position") ? props.get_vector("position")
                                                  : props.get_transform("to_world").apply_point(Vec3f(0.f));
-    const Color3f intensity = props.get_color("intensity", Color3f(1.f));
-    if (!is_finite(intensity) || intensity.x < 0.f || intensity.y < 0.f || intensity.z < 0.f)
-        props.raise("intensity", "'intensity' must be finite and non-negative");
+    const Color3f intensity = get_emission(props, "intensity");
     return std::make_shared<PointEmitter>(position, intensity);
 }
 

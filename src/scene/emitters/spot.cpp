@@ -8,8 +8,8 @@
 // | to_world     | transform | identity           | emitter-to-world transform (light at its origin)  |
 // | texture      | texture   | -                  | projected texture: not supported (LoadError)       |
 #include "core/warp.h"
-#include "scene/emitter.h"
-#include "scene/properties.h"
+#include "core/param.h"
+#include "scene/emitters/emitters.h"
 
 #include <sstream>
 
@@ -38,15 +38,7 @@ public:
 
     // Delta position: weight = I * falloff / dist^2 with discrete pdf 1.
     std::pair<DirectionSample3f, Color3f> sample_direction(const Interaction3f& ref, const Vec2f&) const override {
-        DirectionSample3f ds;
-        ds.p = position_;
-        ds.n = Vec3f(0.f);
-        ds.pdf = 1.f;
-        ds.delta = true;
-        ds.emitter = this;
-        const Vec3f to_light = position_ - ref.p;
-        ds.dist = norm(to_light);
-        ds.d = to_light / ds.dist;
+        const DirectionSample3f ds = delta_position_sample(this, position_, ref);
         const float f = falloff(to_world_.inverse().apply_vector(-ds.d));
         return {ds, intensity_ * (f / (ds.dist * ds.dist))};
     }
@@ -77,7 +69,18 @@ public:
         return os.str();
     }
 
+    // I falloff(ω) / |p - x_src|² at p.
+    template <typename T> Color3<T> eval_delta_t(const Vec3<T>& p) const {
+        const Vec3<T> d = p - Vec3<T>(position_);
+        const T dist2 = squared_norm(d);
+        using std::sqrt;
+        const Vec3<T> local = to_world_.inverse().apply_vector(d / sqrt(dist2));
+        return param_color<T>(intensity_, index_) * (falloff(local) / dist2);
+    }
+    void traverse(ParamVisitor& v) override { v.put("intensity", &intensity_.x, 3, &index_); }
+
 private:
+    int index_ = -1;
     Transform to_world_;
     Vec3f position_;
     Color3f intensity_;
@@ -89,9 +92,7 @@ private:
 std::shared_ptr<Emitter> make_spot_emitter(const Properties& props) {
     if (props.has("texture"))
         props.raise("texture", "unsupported parameter 'texture': projection textures on spot lights are not supported");
-    const Color3f intensity = props.get_color("intensity", Color3f(1.f));
-    if (!is_finite(intensity) || intensity.x < 0.f || intensity.y < 0.f || intensity.z < 0.f)
-        props.raise("intensity", "'intensity' must be finite and non-negative");
+    const Color3f intensity = get_emission(props, "intensity");
     const float cutoff = props.get_float("cutoff_angle", 20.f);
     const float beam = props.get_float("beam_width", cutoff * 0.75f);
     if (!(cutoff > 0.f) || !(cutoff <= 180.f)) props.raise("cutoff_angle", "'cutoff_angle' must be in (0, 180] degrees");

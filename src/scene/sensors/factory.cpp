@@ -6,14 +6,9 @@
 //   shutter_open, shutter_close  float      0, 0       (accepted; penumbra renders static scenes)
 //   film                         nested     hdrfilm with its defaults
 //   sampler                      nested     independent with its defaults
-#include "scene/factory.h"
-#include "scene/sensor.h"
+#include "scene/sensors/sensor_common.h"
 
 namespace penumbra {
-
-// Defined in the plugin files of this directory.
-std::shared_ptr<Sensor> make_perspective_sensor(const Properties& props, const LoadContext& ctx);
-std::shared_ptr<Sensor> make_orthographic_sensor(const Properties& props, const LoadContext& ctx);
 
 namespace {
 

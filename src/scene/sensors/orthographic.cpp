@@ -4,26 +4,19 @@
 // near plane z = near_clip, scaled and placed by to_world (its scale sets the view extent). Film position
 // (px, py) in pixels, (0, 0) = top-left, maps to the camera-space point (1 - 2 px / W, (1 - 2 py / H) /
 // aspect); rays travel along to_world's +z.
-#include "scene/factory.h"
-#include "scene/sensor.h"
+#include "scene/sensors/sensor_common.h"
 
 #include <cmath>
 
 namespace penumbra {
 
-void load_sensor_common(Sensor& sensor, const Properties& props,
-                        const LoadContext& ctx); // sensors/factory.cpp
-
 namespace {
 
-class OrthographicCamera final : public Sensor {
+class OrthographicCamera final : public SensorBase<OrthographicCamera, ProjectiveCamera> {
   public:
     // Called once the film and the transform are set.
     void configure() {
-        size_ = Vec2f(float(film->width), float(film->height));
-        aspect_ = size_.x / size_.y;
-        to_local_ = to_world.inverse();
-        forward_ = normalize(to_world.apply_vector(Vec3f(0.f, 0.f, 1.f)));
+        configure_projection();
         // World-space area of the film rectangle: |X x Y| * 2 * (2 / aspect).
         const Vec3f x_axis = to_world.apply_vector(Vec3f(1.f, 0.f, 0.f));
         const Vec3f y_axis = to_world.apply_vector(Vec3f(0.f, 1.f, 0.f));
@@ -40,7 +33,7 @@ class OrthographicCamera final : public Sensor {
         const Vec3f q = to_local_.apply_point(p);
         if (!(q.z >= near_clip && q.z <= far_clip)) return false;
         film_pos = Vec2f(0.5f * (1.f - q.x) * size_.x, 0.5f * (1.f - aspect_ * q.y) * size_.y);
-        return film_pos.x >= 0.f && film_pos.x <= size_.x && film_pos.y >= 0.f && film_pos.y <= size_.y;
+        return on_film(film_pos);
     }
 
     // Delta direction: the connection is the point of the film that sees `ref` along the view direction.
@@ -62,13 +55,26 @@ class OrthographicCamera final : public Sensor {
         return {ds, Color3f(1.f / film_area_)};
     }
 
+    void set_transform(const Transform& t) override {
+        to_world = t;
+        configure();
+    }
+
+    // s(p) as in project(), and |ds/dA| = (W H / A_film) |cos θ_p| (parallel projection).
+    template <typename T> bool film_position_t(const Vec3<T>& p, const Vec3<T>& n, Vec2<T>& film_pos, T& jacobian) const {
+        using std::abs;
+        const Vec3<T> q = to_local_.apply_point(p);
+        if (!(detach(q.z) >= near_clip)) return false;
+        film_pos = Vec2<T>(T(0.5f) * (T(1.f) - q.x) * T(size_.x), T(0.5f) * (T(1.f) - T(aspect_) * q.y) * T(size_.y));
+        jacobian = T(size_.x * size_.y / film_area_) * abs(dot(n, Vec3<T>(forward_)));
+        return true;
+    }
+    template <typename T> Vec3<T> to_sensor_t(const Vec3<T>&) const { return Vec3<T>(-forward_); }
+
     std::string to_string() const override { return "OrthographicCamera[film=" + film->to_string() + "]"; }
 
   private:
-    Vec2f size_;
-    float aspect_ = 1.f, film_area_ = 1.f;
-    Transform to_local_;
-    Vec3f forward_;
+    float film_area_ = 1.f;
 };
 
 } // namespace

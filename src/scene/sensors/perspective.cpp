@@ -10,16 +10,12 @@
 // Camera space: looks along +z, +x is left, +y up (Transform::look_at). A film position (px, py) in pixels,
 // (0, 0) = top-left, maps to s = (px / W, py / H) + principal_point_offset and to the direction
 //   d_local ~ (tan(fov_x / 2) (1 - 2 s_x), tan(fov_x / 2) (1 - 2 s_y) / aspect, 1),   aspect = W / H.
-#include "scene/factory.h"
-#include "scene/sensor.h"
+#include "scene/sensors/sensor_common.h"
 
 #include <cmath>
 #include <cstdlib>
 
 namespace penumbra {
-
-void load_sensor_common(Sensor& sensor, const Properties& props,
-                        const LoadContext& ctx); // sensors/factory.cpp
 
 namespace {
 
@@ -78,18 +74,15 @@ bool has_scale(const Transform& t) {
     return false;
 }
 
-class PerspectiveCamera final : public Sensor {
+class PerspectiveCamera final : public SensorBase<PerspectiveCamera, ProjectiveCamera> {
   public:
     // Called once the film and the transform are set.
     void configure(float x_fov_deg, const Vec2f& principal_point_offset) {
+        configure_projection();
         x_fov_ = x_fov_deg;
         tan_half_ = std::tan(0.5f * radians(x_fov_deg));
         ppo_ = principal_point_offset;
-        size_ = Vec2f(float(film->width), float(film->height));
-        aspect_ = size_.x / size_.y;
-        to_local_ = to_world.inverse();
         origin_ = to_world.apply_point(Vec3f(0.f));
-        forward_ = normalize(to_world.apply_vector(Vec3f(0.f, 0.f, 1.f)));
         // Image-plane area at distance 1: (2 tan(fov_x / 2)) x (2 tan(fov_x / 2) / aspect).
         plane_area_ = 4.f * tan_half_ * tan_half_ / aspect_;
     }
@@ -107,7 +100,7 @@ class PerspectiveCamera final : public Sensor {
         const float sx = 0.5f * (1.f - q.x / (q.z * tan_half_));
         const float sy = 0.5f * (1.f - aspect_ * q.y / (q.z * tan_half_));
         film_pos = Vec2f((sx - ppo_.x) * size_.x, (sy - ppo_.y) * size_.y);
-        return film_pos.x >= 0.f && film_pos.x <= size_.x && film_pos.y >= 0.f && film_pos.y <= size_.y;
+        return on_film(film_pos);
     }
 
     // Pinhole importance W(d) = 1 / (A cos^3 theta) (Mitsuba's importance(): includes the image-plane
@@ -131,6 +124,31 @@ class PerspectiveCamera final : public Sensor {
         return {ds, Color3f(importance / (dist * dist))};
     }
 
+    void set_transform(const Transform& t) override {
+        to_world = t;
+        configure(x_fov_, ppo_);
+    }
+
+    // s(p) as in project(), and |ds/dA| = (W H / A) cos θ_p / (d² cos³ θ_c): pixels per unit solid angle
+    // (W H / A / cos³ θ_c, A the image-plane area at distance 1) times dω/dA = cos θ_p / d².
+    template <typename T> bool film_position_t(const Vec3<T>& p, const Vec3<T>& n, Vec2<T>& film_pos, T& jacobian) const {
+        using std::abs;
+        using std::sqrt;
+        const Vec3<T> q = to_local_.apply_point(p);
+        if (!(detach(q.z) > 0.f)) return false;
+        const T sx = T(0.5f) * (T(1.f) - q.x / (q.z * T(tan_half_)));
+        const T sy = T(0.5f) * (T(1.f) - T(aspect_) * q.y / (q.z * T(tan_half_)));
+        film_pos = Vec2<T>((sx - T(ppo_.x)) * T(size_.x), (sy - T(ppo_.y)) * T(size_.y));
+        const Vec3<T> d = p - Vec3<T>(origin_);
+        const T dist2 = squared_norm(d);
+        const T dist = sqrt(dist2);
+        const T cos_c = q.z / dist;
+        const T cos_p = abs(dot(n, d)) / dist;
+        jacobian = T(size_.x * size_.y / plane_area_) * cos_p / (dist2 * cos_c * cos_c * cos_c);
+        return true;
+    }
+    template <typename T> Vec3<T> to_sensor_t(const Vec3<T>& p) const { return normalize(Vec3<T>(origin_) - p); }
+
     std::string to_string() const override {
         return "PerspectiveCamera[x_fov=" + std::to_string(x_fov_) + ", film=" + film->to_string() + "]";
     }
@@ -138,10 +156,8 @@ class PerspectiveCamera final : public Sensor {
   private:
     float x_fov_ = 0.f, tan_half_ = 0.f;
     Vec2f ppo_;
-    Vec2f size_;
-    float aspect_ = 1.f, plane_area_ = 1.f;
-    Transform to_local_;
-    Vec3f origin_, forward_;
+    float plane_area_ = 1.f;
+    Vec3f origin_;
 };
 
 } // namespace

@@ -11,15 +11,11 @@
 // texel (i, j) covers [i, i+1]/W x [j, j+1]/H. Mitsuba's mesh loaders flip v (v = 1 - v_obj) so that OBJ uvs,
 // whose v points up, address the image the usual way.
 #include "core/image.h"
-#include "scene/factory.h"
-#include "scene/texture.h"
+#include "scene/textures/textures.h"
 
-#include <array>
 #include <cmath>
 
 namespace penumbra {
-
-std::array<float, 6> uv_affine(const Transform& to_uv); // textures/factory.cpp
 
 namespace {
 

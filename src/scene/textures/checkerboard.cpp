@@ -1,18 +1,15 @@
 // Mitsuba 3 `checkerboard` texture.
 //
 // Parameters:
-//   color0  texture/rgb/float  0.4   value of the patches where both fractional uv parts are on the same side
-//   of 1/2 color1  texture/rgb/float  0.2   value of the other patches to_uv   transform          none affine
-//   map applied to the uv coordinates first
-#include "scene/factory.h"
-#include "scene/texture.h"
+//   color0  texture/rgb/float  0.4   value of the patches where both fractional uv parts are on the same
+//                                    side of 1/2
+//   color1  texture/rgb/float  0.2   value of the other patches
+//   to_uv   transform          none  affine map applied to the uv coordinates first
+#include "scene/textures/textures.h"
 
-#include <array>
 #include <cmath>
 
 namespace penumbra {
-
-std::array<float, 6> uv_affine(const Transform& to_uv); // textures/factory.cpp
 
 namespace {
 

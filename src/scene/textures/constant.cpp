@@ -4,8 +4,8 @@
 // Mitsuba parameters (via make_texture):
 //   srgb:    color  rgb    (required)
 //   uniform: value  float  (required)
-#include "scene/factory.h"
-#include "scene/texture.h"
+#include "core/param.h"
+#include "scene/textures/textures.h"
 
 namespace penumbra {
 
@@ -14,7 +14,10 @@ namespace {
 class ConstantTexture final : public TextureBase<ConstantTexture> {
   public:
     explicit ConstantTexture(const Color3f& value) : value_(value) {}
-    template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>&) const { return Color3<T>(value_); }
+    template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>&) const {
+        return param_color<T>(value_, index_);
+    }
+    void traverse(ParamVisitor& v) override { v.put("", &value_.x, 3, &index_); }
     Color3f mean() const override { return value_; }
     bool is_constant() const override { return true; }
     std::string to_string() const override {
@@ -24,6 +27,7 @@ class ConstantTexture final : public TextureBase<ConstantTexture> {
 
   private:
     Color3f value_;
+    int index_ = -1;
 };
 
 } // namespace

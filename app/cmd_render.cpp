@@ -1,61 +1,16 @@
-// The `penumbra` command line: a thin front over the library (load scene -> render / inspect).
+// `penumbra render` and `penumbra info`.
+#include "cli.h"
+
 #include "core/exr_layers.h"
 #include "render/integrator.h"
 #include "render/render.h"
 #include "scene/scene.h"
 
-#include <CLI/CLI.hpp>
-
-#include <unistd.h>
-
-#include <chrono>
 #include <cstdio>
-#include <filesystem>
-#include <iostream>
-#include <map>
 
-using namespace penumbra;
+namespace penumbra::cli {
 
 namespace {
-
-std::map<std::string, std::string> parse_defines(const std::vector<std::string>& defines) {
-    std::map<std::string, std::string> result;
-    for (const std::string& d : defines) {
-        const size_t eq = d.find('=');
-        if (eq == std::string::npos || eq == 0) throw Error("-D expects name=value, got '" + d + "'");
-        result[d.substr(0, eq)] = d.substr(eq + 1);
-    }
-    return result;
-}
-
-std::string lower_extension(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return ext;
-}
-
-// A progress bar on stderr, redrawn at most every 100 ms, only when stderr is a terminal.
-class ProgressBar {
-public:
-    explicit ProgressBar(bool enabled) : enabled_(enabled && isatty(STDERR_FILENO)) {}
-    void update(float fraction) {
-        if (!enabled_) return;
-        const auto now = std::chrono::steady_clock::now();
-        if (fraction < 1.f && now - last_ < std::chrono::milliseconds(100)) return;
-        last_ = now;
-        const int width = 40, filled = int(fraction * width);
-        const double elapsed = std::chrono::duration<double>(now - start_).count();
-        std::string bar(size_t(filled), '=');
-        bar.resize(width, ' ');
-        std::fprintf(stderr, "\r[%s] %5.1f%%  %.1fs", bar.c_str(), 100.0 * fraction, elapsed);
-        if (fraction >= 1.f) std::fprintf(stderr, "\n");
-        std::fflush(stderr);
-    }
-
-private:
-    bool enabled_;
-    std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_{};
-};
 
 int cmd_render(const std::string& scene_path, const std::string& output, int spp, uint64_t seed, int threads,
                const std::vector<std::string>& defines, const std::string& integrator, bool quiet) {
@@ -71,7 +26,7 @@ int cmd_render(const std::string& scene_path, const std::string& output, int spp
     options.seed = seed;
     options.threads = threads;
     ProgressBar bar(!quiet);
-    options.progress = [&](float f) { bar.update(f); };
+    options.progress = bar.callback();
     RenderStats stats;
     const std::vector<Layer> layers = render_layers(*scene, options, &stats);
 
@@ -121,39 +76,33 @@ int cmd_info(const std::string& scene_path, const std::vector<std::string>& defi
 
 } // namespace
 
-int main(int argc, char** argv) {
-    CLI::App app{"penumbra: a physics-based differentiable renderer"};
-    app.require_subcommand(1);
-
-    std::string scene_path, output;
-    int spp = 0, threads = 0;
-    uint64_t seed = 0;
-    std::vector<std::string> defines;
-    std::string integrator;
-    bool quiet = false;
+void add_render_commands(CLI::App& app) {
+    struct Options {
+        std::string scene, output, integrator;
+        int spp = 0, threads = 0;
+        uint64_t seed = 0;
+        std::vector<std::string> defines;
+        bool quiet = false;
+    };
+    auto opt = std::make_shared<Options>();
     auto* render = app.add_subcommand("render", "render a Mitsuba 3 XML scene to an image");
-    render->add_option("scene", scene_path, "scene file (Mitsuba 3 XML)")->required();
-    render->add_option("-o,--output", output, "output image (.exr or .png)")->required();
-    render->add_option("--spp", spp, "samples per pixel (default: the scene's sampler)")->check(CLI::PositiveNumber);
-    render->add_option("--seed", seed, "random seed");
-    render->add_option("--threads", threads, "worker threads (default: all)")->check(CLI::NonNegativeNumber);
-    render->add_option("-D", defines, "override a <default> value: name=value");
-    render->add_option("--integrator", integrator, "replace the scene's integrator (path, direct, ptracer)");
-    render->add_flag("-q,--quiet", quiet, "no progress bar");
+    render->add_option("scene", opt->scene, "scene file (Mitsuba 3 XML)")->required();
+    render->add_option("-o,--output", opt->output, "output image (.exr or .png)")->required();
+    render->add_option("--spp", opt->spp, "samples per pixel (default: the scene's sampler)")->check(CLI::PositiveNumber);
+    render->add_option("--seed", opt->seed, "random seed");
+    render->add_option("--threads", opt->threads, "worker threads (default: all)")->check(CLI::NonNegativeNumber);
+    render->add_option("-D", opt->defines, "override a <default> value: name=value");
+    render->add_option("--integrator", opt->integrator, "replace the scene's integrator (path, direct, ptracer)");
+    render->add_flag("-q,--quiet", opt->quiet, "no progress bar");
+    render->callback([opt] {
+        cmd_render(opt->scene, opt->output, opt->spp, opt->seed, opt->threads, opt->defines, opt->integrator, opt->quiet);
+    });
 
-    std::string info_path;
-    std::vector<std::string> info_defines;
+    auto info_opt = std::make_shared<Options>();
     auto* info = app.add_subcommand("info", "print what a scene contains");
-    info->add_option("scene", info_path, "scene file (Mitsuba 3 XML)")->required();
-    info->add_option("-D", info_defines, "override a <default> value: name=value");
-
-    CLI11_PARSE(app, argc, argv);
-    try {
-        if (*render) return cmd_render(scene_path, output, spp, seed, threads, defines, integrator, quiet);
-        if (*info) return cmd_info(info_path, info_defines);
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "penumbra: error: %s\n", e.what());
-        return 1;
-    }
-    return 0;
+    info->add_option("scene", info_opt->scene, "scene file (Mitsuba 3 XML)")->required();
+    info->add_option("-D", info_opt->defines, "override a <default> value: name=value");
+    info->callback([info_opt] { cmd_info(info_opt->scene, info_opt->defines); });
 }
+
+} // namespace penumbra::cli

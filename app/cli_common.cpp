@@ -1,0 +1,47 @@
+#include "cli.h"
+
+#include "core/error.h"
+
+#include <unistd.h>
+
+#include <cctype>
+#include <cstdio>
+#include <filesystem>
+
+namespace penumbra::cli {
+
+std::map<std::string, std::string> parse_defines(const std::vector<std::string>& defines) {
+    std::map<std::string, std::string> result;
+    for (const std::string& d : defines) {
+        const size_t eq = d.find('=');
+        if (eq == std::string::npos || eq == 0) throw Error("-D expects name=value, got '" + d + "'");
+        result[d.substr(0, eq)] = d.substr(eq + 1);
+    }
+    return result;
+}
+
+std::string lower_extension(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return ext;
+}
+
+ProgressBar::ProgressBar(bool enabled, std::string label)
+    : enabled_(enabled && isatty(STDERR_FILENO)), label_(std::move(label)), start_(std::chrono::steady_clock::now()) {}
+
+void ProgressBar::update(float fraction) {
+    if (!enabled_) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (fraction < 1.f && now - last_ < std::chrono::milliseconds(100)) return;
+    last_ = now;
+    const int width = 40, filled = int(fraction * width);
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    std::string bar(size_t(std::max(0, filled)), '=');
+    bar.resize(width, ' ');
+    std::fprintf(stderr, "\r%s[%s] %5.1f%%  %.1fs", label_.empty() ? "" : (label_ + " ").c_str(), bar.c_str(),
+                 100.0 * fraction, elapsed);
+    if (fraction >= 1.f) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+}
+
+} // namespace penumbra::cli

@@ -1,0 +1,219 @@
+// `penumbra params | derivative | gradient | fd | compare`: differentiation from the command line.
+#include "cli.h"
+
+#include "core/colormap.h"
+#include "diff/finite_difference.h"
+#include "diff/interior.h"
+#include "scene/scene.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <fstream>
+
+namespace penumbra::cli {
+
+namespace {
+
+struct Common {
+    std::string scene;
+    std::vector<std::string> defines, params;
+    int spp = 64, threads = 0, batches = 0;
+    uint64_t seed = 0;
+    std::string output, stderr_output;
+    bool quiet = false;
+};
+
+void add_common(CLI::App* cmd, Common& c, bool needs_params) {
+    cmd->add_option("scene", c.scene, "scene file (Mitsuba 3 XML)")->required();
+    auto* p = cmd->add_option("--param", c.params,
+                              "parameter to differentiate, optionally with a direction: NAME[=v1,v2,...] (repeatable)");
+    if (needs_params) p->required();
+    cmd->add_option("-D", c.defines, "override a <default> value: name=value");
+    cmd->add_option("--spp", c.spp, "samples per pixel (in total)")->check(CLI::PositiveNumber);
+    cmd->add_option("--seed", c.seed, "random seed");
+    cmd->add_option("--threads", c.threads, "worker threads (default: all)")->check(CLI::NonNegativeNumber);
+    cmd->add_flag("-q,--quiet", c.quiet, "no progress bar");
+}
+
+std::vector<std::pair<std::string, std::vector<float>>> selection(const std::vector<std::string>& params) {
+    std::vector<std::pair<std::string, std::vector<float>>> s;
+    for (const std::string& p : params) s.push_back(parse_param_selection(p));
+    return s;
+}
+
+// Output by extension: .exr (values) or .png (diverging colormap).
+void write_signed(const std::string& path, const Image& image) {
+    const std::string ext = lower_extension(path);
+    if (ext == ".png") write_image(path, diverging_colormap(image));
+    else write_image(path, image);
+}
+
+void check_output(const std::string& path) {
+    const std::string ext = lower_extension(path);
+    if (ext != ".exr" && ext != ".png") throw Error("output '" + path + "': expected a .exr or .png file name");
+}
+
+// Splits the sample budget into batches for standard errors (8 when --stderr is requested).
+int batches_for(const Common& c) {
+    const int b = c.batches > 0 ? c.batches : (c.stderr_output.empty() ? 1 : 8);
+    if (c.spp < b) throw Error("--spp " + std::to_string(c.spp) + " is smaller than the " + std::to_string(b) + " batches");
+    return b;
+}
+
+double image_mean(const Image& img) {
+    double m = 0;
+    for (const Color3f& c : img.pixels) m += double(c.x) + c.y + c.z;
+    return m / (3.0 * double(img.pixels.size()));
+}
+
+void cmd_params(const Common& c) {
+    auto scene = load_scene(c.scene, parse_defines(c.defines));
+    Parameters params(*scene);
+    std::printf("%-48s %10s  %s\n", "name", "size", "kind");
+    for (const Parameter& p : params.all()) {
+        const char* kind = p.kind == Parameter::Kind::Data ? (p.geometry ? "geometry" : "value")
+                           : p.kind == Parameter::Kind::Translate ? "motion (direction: world vector)"
+                           : p.kind == Parameter::Kind::Rotate ? "motion (direction: world axis; radians)"
+                                                               : "motion (uniform scale)";
+        std::printf("%-48s %10d  %s\n", p.name.c_str(), p.size, kind);
+    }
+}
+
+void cmd_derivative(const Common& c, bool no_antithetic) {
+    check_output(c.output);
+    auto scene = load_scene(c.scene, parse_defines(c.defines));
+    Parameters params(*scene);
+    params.enable(selection(c.params));
+    DiffOptions o;
+    o.batches = batches_for(c);
+    o.spp = c.spp / o.batches;
+    o.seed = c.seed;
+    o.threads = c.threads;
+    o.antithetic = !no_antithetic;
+    o.path = path_settings(*scene);
+    ProgressBar bar(!c.quiet, "derivative");
+    o.progress = bar.callback();
+    const DerivativeImage d = render_derivative(*scene, params, o);
+    write_signed(c.output, d.derivative);
+    if (!c.stderr_output.empty()) write_image(c.stderr_output, d.stderr_img);
+    const Film& film = *scene->sensor->film;
+    std::fprintf(stderr, "derivative (interior term) %dx%d at %d spp in %.2f s, mean %.6g -> %s\n", film.width,
+                 film.height, o.spp * o.batches, d.seconds, image_mean(d.derivative), c.output.c_str());
+}
+
+void cmd_fd(const Common& c, double eps) {
+    check_output(c.output);
+    auto scene = load_scene(c.scene, parse_defines(c.defines));
+    Parameters params(*scene);
+    params.enable(selection(c.params));
+    RenderOptions o;
+    const int batches = batches_for(c);
+    o.spp = c.spp / batches;
+    o.seed = c.seed;
+    o.threads = c.threads;
+    ProgressBar bar(!c.quiet, "fd");
+    o.progress = bar.callback();
+    const FiniteDifference fd = finite_difference(*scene, params, eps, o, batches);
+    write_signed(c.output, fd.derivative);
+    if (!c.stderr_output.empty()) write_image(c.stderr_output, fd.stderr_img);
+    std::fprintf(stderr, "central differences (h = %g) at %d spp per side in %.2f s, mean %.6g -> %s\n", eps,
+                 o.spp * batches, fd.seconds, image_mean(fd.derivative), c.output.c_str());
+}
+
+void cmd_gradient(const Common& c, const std::string& adjoint_path) {
+    auto scene = load_scene(c.scene, parse_defines(c.defines));
+    Parameters params(*scene);
+    if (c.params.empty()) params.enable_all_data();
+    else params.enable(selection(c.params));
+    const Image adjoint = read_image(adjoint_path, false);
+    DiffOptions o;
+    o.spp = c.spp;
+    o.seed = c.seed;
+    o.threads = c.threads;
+    o.path = path_settings(*scene);
+    ProgressBar bar(!c.quiet, "gradient");
+    o.progress = bar.callback();
+    const Gradient g = render_gradient(*scene, params, adjoint, o);
+    nlohmann::json out;
+    out["seconds"] = g.seconds;
+    out["spp"] = c.spp;
+    for (const auto& [p, index] : params.enabled()) {
+        std::vector<double> values(g.values.begin() + index, g.values.begin() + index + p->size);
+        double norm2 = 0;
+        for (double v : values) norm2 += v * v;
+        out["parameters"].push_back({{"name", p->name}, {"size", p->size}, {"gradient", values}});
+        std::printf("%-48s %8d  |dL/dθ| = %.6g\n", p->name.c_str(), p->size, std::sqrt(norm2));
+    }
+    if (!c.output.empty()) {
+        const std::string tmp = c.output + ".tmp";
+        {
+            std::ofstream file(tmp);
+            file << out.dump(1) << "\n";
+            if (!file) throw Error("cannot write '" + c.output + "'");
+        }
+        std::filesystem::rename(tmp, c.output);
+    }
+    std::fprintf(stderr, "gradient of %d parameter scalars at %d spp in %.2f s%s%s\n", params.dimension(), c.spp,
+                 g.seconds, c.output.empty() ? "" : " -> ", c.output.c_str());
+}
+
+void cmd_compare(const std::string& test, const std::string& ref, const std::string& test_se, const std::string& ref_se) {
+    const Image a = read_image(test, false), b = read_image(ref, false);
+    const Image sa = test_se.empty() ? Image() : read_image(test_se, false);
+    const Image sb = ref_se.empty() ? Image() : read_image(ref_se, false);
+    const Comparison c = compare_images(a, b, sa, sb);
+    std::printf("relerr = %.6f   (Σ|D−R| / Σ|R| over %dx%d pixels)\n", c.relerr, a.width, a.height);
+    std::printf("mean: test %.6g  reference %.6g\n", c.mean_test, c.mean_ref);
+    if (!sa.pixels.empty() || !sb.pixels.empty())
+        std::printf("z-score of the image mean = %.3f   pixels with |z| > 3: %.2f%%\n", c.mean_z,
+                    100.0 * c.outlier_fraction);
+}
+
+} // namespace
+
+void add_diff_commands(CLI::App& app) {
+    auto params = std::make_shared<Common>();
+    auto* p = app.add_subcommand("params", "list the differentiable parameters of a scene");
+    p->add_option("scene", params->scene, "scene file (Mitsuba 3 XML)")->required();
+    p->add_option("-D", params->defines, "override a <default> value: name=value");
+    p->callback([params] { cmd_params(*params); });
+
+    auto deriv = std::make_shared<Common>();
+    auto no_antithetic = std::make_shared<bool>(false);
+    auto* d = app.add_subcommand("derivative", "forward mode: the image derivative dI/dθ (interior term)");
+    add_common(d, *deriv, true);
+    d->add_option("-o,--output", deriv->output, "derivative image (.exr values, .png colormap)")->required();
+    d->add_option("--stderr", deriv->stderr_output, "per-pixel standard-error image (.exr)");
+    d->add_option("--batches", deriv->batches, "independent batches for --stderr (default 8)")->check(CLI::PositiveNumber);
+    d->add_flag("--no-antithetic", *no_antithetic, "disable pixel-level antithetic sampling");
+    d->callback([deriv, no_antithetic] { cmd_derivative(*deriv, *no_antithetic); });
+
+    auto fd = std::make_shared<Common>();
+    auto eps = std::make_shared<double>(1e-2);
+    auto* f = app.add_subcommand("fd", "central finite differences with common random numbers");
+    add_common(f, *fd, true);
+    f->add_option("-o,--output", fd->output, "derivative image (.exr values, .png colormap)")->required();
+    f->add_option("--eps", *eps, "step h")->check(CLI::PositiveNumber);
+    f->add_option("--stderr", fd->stderr_output, "per-pixel standard-error image (.exr)");
+    f->add_option("--batches", fd->batches, "independent batches for --stderr (default 8)")->check(CLI::PositiveNumber);
+    f->callback([fd, eps] { cmd_fd(*fd, *eps); });
+
+    auto grad = std::make_shared<Common>();
+    auto adjoint = std::make_shared<std::string>();
+    auto* g = app.add_subcommand("gradient", "reverse mode: dL/dθ for all parameters given an adjoint image ∂L/∂I");
+    add_common(g, *grad, false);
+    g->add_option("--adjoint", *adjoint, "adjoint image ∂L/∂I (.exr, the film's size)")->required();
+    g->add_option("-o,--output", grad->output, "gradient as JSON");
+    g->callback([grad, adjoint] { cmd_gradient(*grad, *adjoint); });
+
+    auto cmp = std::make_shared<std::array<std::string, 4>>();
+    auto* c = app.add_subcommand("compare", "relerr and z-scores of a derivative image against a reference");
+    c->add_option("test", (*cmp)[0], "image to test (.exr)")->required();
+    c->add_option("reference", (*cmp)[1], "reference image (.exr)")->required();
+    c->add_option("--stderr", (*cmp)[2], "standard-error image of the test image");
+    c->add_option("--ref-stderr", (*cmp)[3], "standard-error image of the reference");
+    c->callback([cmp] { cmd_compare((*cmp)[0], (*cmp)[1], (*cmp)[2], (*cmp)[3]); });
+}
+
+} // namespace penumbra::cli

@@ -1,0 +1,207 @@
+#include "diff/interior.h"
+
+#include "diff/material_form.h"
+#include "render/path.h"
+#include "render/tiles.h"
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include <chrono>
+
+namespace penumbra {
+
+PathSettings path_settings(const Scene& scene) {
+    if (const auto* path = dynamic_cast<const PathIntegrator*>(scene.integrator.get())) return path->settings();
+    return PathSettings{};
+}
+
+namespace {
+
+struct FilmSample {
+    Vec2f offset; // from the pixel center, in pixels
+    float pdf;    // density of `offset`
+};
+
+// A defensive mixture of the normalized filter and the uniform density on its support square: the density is
+// bounded below, so P(s(θ))/p and its derivative stay bounded for any continuous filter (a tent's derivative
+// would have unbounded variance under pure filter sampling). The antithetic partner mirrors the offset about
+// the pixel center (paper 001 §5.1); the mixture is point-symmetric, so both have the same density.
+FilmSample sample_film(const ReconstructionFilter& filter, Sampler& sampler, bool mirror) {
+    const float r = filter.radius();
+    const float choose = sampler.next_1d();
+    const Vec2f u = sampler.next_2d();
+    Vec2f offset = choose < 0.5f ? filter.sample(u) : Vec2f((2.f * u.x - 1.f) * r, (2.f * u.y - 1.f) * r);
+    if (mirror) offset = offset * -1.f;
+    const float pdf = 0.5f * filter.eval_normalized(offset) + 0.5f / (4.f * r * r);
+    return {offset, pdf};
+}
+
+// One camera path of pixel (x, y) as a function of θ: W_j(x1(θ)) L(x1 → camera) / p, with the camera factor
+// W_j / p = P_j(s(θ)) |ds/dA|(θ) J(p1) / (p_s |ds/dA|(θ0)) (the pinhole importance of Eqs. 22-23 written on the
+// film, P_j the normalized reconstruction filter of pixel j, s the projection of x1).
+Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sampler& sampler, int x, int y,
+                                bool mirror, const PathSettings& settings, RayCounter& rays) {
+    const Sensor& sensor = *scene.sensor;
+    const ReconstructionFilter& filter = *sensor.film->rfilter;
+    const FilmSample fs = sample_film(filter, sampler, mirror);
+    const Vec2f center(x + 0.5f, y + 0.5f);
+    const auto [ray, ray_weight] = sensor.sample_ray(center + fs.offset, sampler.next_2d());
+    ++rays.rays;
+    const SurfaceInteraction3f first = scene.intersect(ray);
+    if (!first.is_valid()) {
+        // The environment seen through the film is a direction: it does not move with θ.
+        const float w = filter.eval_normalized(fs.offset) / fs.pdf;
+        return Color3<Var>(settings.hide_emitters ? Color3f(0.f) : scene.eval_environment(ray.d) * ray_weight * w);
+    }
+
+    SurfaceInteraction<Var> x1 = form.vertex(first);
+    const Vec3f camera = sensor.to_world.apply_point(Vec3f(0.f));
+    const Vec3<Var> p_cam = form.to_reference_camera(x1.p, camera);
+    const Vec3<Var> n_cam = form.direction_to_reference_camera(x1.n);
+    Vec2<Var> s;
+    Var jacobian;
+    if (!sensor.film_position(p_cam, n_cam, s, jacobian)) return Color3<Var>(Var(0.f));
+    const Var P = filter.eval_normalized(Vec2<Var>(s.x - Var(center.x), s.y - Var(center.y)));
+    const Var camera_factor = P * relative_change(jacobian * form.jacobian(first)) / Var(fs.pdf);
+
+    x1.wi = x1.to_local(form.direction_from_reference_camera(sensor.to_sensor(p_cam)));
+    return trace_path<Var>(scene, sampler, ray, first, x1, form, settings, rays) * camera_factor;
+}
+
+bool finite(const Color3<Var>& c) { return std::isfinite(c.x.v) && std::isfinite(c.y.v) && std::isfinite(c.z.v); }
+
+float tangent_of(const Var& v, const std::vector<float>& tangent) { return v.id < 0 ? 0.f : tangent[v.id]; }
+
+struct PixelSums {
+    Image primal, derivative;
+};
+
+// One batch of the forward-mode estimator.
+PixelSums forward_batch(const Scene& scene, const Parameters& params, const DiffOptions& options, uint64_t seed,
+                        const std::function<void(float)>& progress) {
+    const Film& film = *scene.sensor->film;
+    PixelSums out{Image(film.width, film.height), Image(film.width, film.height)};
+    const MaterialForm form(params);
+    const PathSettings settings = options.path;
+    for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
+        Sampler sampler;
+        RayCounter rays;
+        std::vector<float> tangent;
+        Tape& tape = Tape::current();
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                const uint64_t pixel = uint64_t(y) * film.width + x;
+                Vec3d primal(0.0), derivative(0.0);
+                for (int m = 0; m < options.spp; ++m) {
+                    const bool mirror = options.antithetic && (m & 1);
+                    sampler.start(seed, pixel, uint64_t(options.antithetic ? m / 2 : m));
+                    tape.clear();
+                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, mirror, settings, rays);
+                    if (!finite(c)) continue;
+                    tape.forward(params.direction().data(), tangent);
+                    primal += Vec3d(c.x.v, c.y.v, c.z.v);
+                    const Vec3d d(tangent_of(c.x, tangent), tangent_of(c.y, tangent), tangent_of(c.z, tangent));
+                    if (is_finite(Vec3f(d))) derivative += d;
+                }
+                out.primal.at(x, y) = Color3f(primal / double(options.spp));
+                out.derivative.at(x, y) = Color3f(derivative / double(options.spp));
+            }
+        tape.clear();
+    }, progress);
+    return out;
+}
+
+void check_ready(const Scene& scene, const Parameters& params) {
+    if (params.dimension() == 0) throw Error("no parameter is enabled for differentiation");
+    if (!scene.sensor || !scene.sensor->film) throw Error("the scene has no sensor");
+}
+
+} // namespace
+
+DerivativeImage render_derivative(const Scene& scene, const Parameters& params, const DiffOptions& options) {
+    check_ready(scene, params);
+    if (options.spp <= 0 || options.batches <= 0) throw Error("derivative: spp and batches must be positive");
+    const auto start = std::chrono::steady_clock::now();
+    const Film& film = *scene.sensor->film;
+    const int B = options.batches;
+    std::vector<PixelSums> batches;
+    for (int b = 0; b < B; ++b) {
+        auto progress = options.progress ? std::function<void(float)>([&, b](float f) { options.progress((b + f) / B); })
+                                         : std::function<void(float)>();
+        batches.push_back(forward_batch(scene, params, options, options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b), progress));
+    }
+    DerivativeImage result{Image(film.width, film.height), Image(film.width, film.height), Image(), 0.0};
+    if (B > 1) result.stderr_img = Image(film.width, film.height);
+    for (size_t i = 0; i < result.primal.pixels.size(); ++i) {
+        Vec3d p(0.0), d(0.0), d2(0.0);
+        for (const PixelSums& s : batches) {
+            const Vec3d v(s.derivative.pixels[i]);
+            p += Vec3d(s.primal.pixels[i]);
+            d += v;
+            d2 += v * v;
+        }
+        result.primal.pixels[i] = Color3f(p / double(B));
+        result.derivative.pixels[i] = Color3f(d / double(B));
+        if (B > 1) {
+            const Vec3d mean = d / double(B);
+            const Vec3d var = (d2 / double(B) - mean * mean) * (double(B) / (B - 1));
+            result.stderr_img.pixels[i] = Color3f(float(std::sqrt(std::max(0.0, var.x) / B)),
+                                                  float(std::sqrt(std::max(0.0, var.y) / B)),
+                                                  float(std::sqrt(std::max(0.0, var.z) / B)));
+        }
+    }
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+}
+
+Gradient render_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const DiffOptions& options) {
+    check_ready(scene, params);
+    const Film& film = *scene.sensor->film;
+    if (adjoint.width != film.width || adjoint.height != film.height)
+        throw Error("gradient: the adjoint image is " + std::to_string(adjoint.width) + "x" +
+                    std::to_string(adjoint.height) + ", the film " + std::to_string(film.width) + "x" +
+                    std::to_string(film.height));
+    if (options.spp <= 0) throw Error("gradient: spp must be positive");
+    const auto start = std::chrono::steady_clock::now();
+    const MaterialForm form(params);
+    const size_t dim = size_t(params.dimension());
+    tbb::enumerable_thread_specific<std::vector<double>> gradients([dim] { return std::vector<double>(dim, 0.0); });
+    Gradient result{std::vector<double>(dim, 0.0), Image(film.width, film.height), 0.0};
+    const float inv_spp = 1.f / float(options.spp);
+
+    for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
+        Sampler sampler;
+        RayCounter rays;
+        std::vector<float> scratch;
+        std::vector<std::pair<int32_t, float>> seeds(3);
+        std::vector<double>& gradient = gradients.local();
+        Tape& tape = Tape::current();
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                const uint64_t pixel = uint64_t(y) * film.width + x;
+                const Color3f a = adjoint.at(x, y) * inv_spp;
+                Vec3d primal(0.0);
+                for (int m = 0; m < options.spp; ++m) {
+                    const bool mirror = options.antithetic && (m & 1);
+                    sampler.start(options.seed, pixel, uint64_t(options.antithetic ? m / 2 : m));
+                    tape.clear();
+                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, mirror, options.path, rays);
+                    if (!finite(c)) continue;
+                    primal += Vec3d(c.x.v, c.y.v, c.z.v);
+                    seeds[0] = {c.x.id, a.x};
+                    seeds[1] = {c.y.id, a.y};
+                    seeds[2] = {c.z.id, a.z};
+                    tape.backward(seeds, gradient.data(), scratch);
+                }
+                result.primal.at(x, y) = Color3f(primal / double(options.spp));
+            }
+        tape.clear();
+    }, options.progress);
+
+    for (const std::vector<double>& g : gradients)
+        for (size_t k = 0; k < dim; ++k) result.values[k] += g[k];
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+}
+
+} // namespace penumbra

@@ -1,0 +1,44 @@
+// The interior term of the material-form differential path integral (paper 001 §5.1, Eq. 19 first term),
+// estimated by path tracing with NEE in the reference configuration and differentiated with the AD tape:
+//   forward mode  dI/dθ along the enabled parameters' direction (a derivative image), and
+//   reverse mode  dL/dθ = Σ_pixels ∂L/∂I · dI/dθ for every enabled parameter (a gradient vector).
+#pragma once
+#include "core/image.h"
+#include "diff/parameters.h"
+#include "render/path_tracer.h"
+
+#include <functional>
+
+namespace penumbra {
+
+struct DiffOptions {
+    int spp = 16;              // samples per pixel (per batch)
+    uint64_t seed = 0;
+    int threads = 0;           // 0 = all
+    bool antithetic = true;    // pixel-level antithetic pairs (paper 001 §5.1, Fig. 6)
+    int batches = 1;           // independent batches, for per-pixel standard errors (forward mode)
+    PathSettings path;         // depth limits of the path sampler
+    std::function<void(float)> progress;
+};
+
+struct DerivativeImage {
+    Image primal;      // the image estimated from the same samples (detached values)
+    Image derivative;  // dI/dθ
+    Image stderr_img;  // per-pixel standard error of `derivative` (empty with a single batch)
+    double seconds = 0;
+};
+
+struct Gradient {
+    std::vector<double> values; // dL/dθ, one per enabled parameter scalar
+    Image primal;
+    double seconds = 0;
+};
+
+// Path settings from the scene's `path` integrator (defaults otherwise).
+PathSettings path_settings(const Scene& scene);
+
+DerivativeImage render_derivative(const Scene& scene, const Parameters& params, const DiffOptions& options);
+// `adjoint` has the film's size: ∂L/∂I per pixel and channel.
+Gradient render_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const DiffOptions& options);
+
+} // namespace penumbra

@@ -1,0 +1,94 @@
+// The material-form parameterization of paper 001 §4.1: a path is sampled in the reference configuration as
+// material points (triangle, barycentrics) and re-evaluated on the spatial geometry x = X(p, θ), with the area
+// Jacobian J(p) = dA(x)/dA(p) (Eq. 17). X is evaluated at θ0 (the identity) with its exact first derivative.
+#pragma once
+#include "diff/parameters.h"
+#include "scene/shape_interaction.h"
+
+#include <type_traits>
+
+namespace penumbra {
+
+// Vertex positions and normals of one shape under the enabled parameters: vertex_positions leaves and motions.
+struct MovedVertices {
+    const Shape& shape;
+    const std::vector<Motion>& motions;
+
+    Vec3<Var> position(uint32_t v) const {
+        const Vec3f p0 = shape.mesh.positions[v];
+        const int base = shape.vertex_param_index;
+        Vec3<Var> x = base < 0 ? Vec3<Var>(p0)
+                               : Vec3<Var>(Var::parameter(p0.x, base + 3 * int(v)), Var::parameter(p0.y, base + 3 * int(v) + 1),
+                                           Var::parameter(p0.z, base + 3 * int(v) + 2));
+        // dX/dθ at θ = 0: translate d, rotate a × (p - c), scale (p - c).
+        for (const Motion& m : motions) {
+            const Var theta = Var::parameter(0.f, m.index);
+            if (m.kind == Parameter::Kind::Translate) x += Vec3<Var>(m.vector) * theta;
+            else if (m.kind == Parameter::Kind::Rotate) x += Vec3<Var>(cross(m.vector, p0 - m.center)) * theta;
+            else x += Vec3<Var>(p0 - m.center) * theta;
+        }
+        return x;
+    }
+    // Vertex normals rotate with rotations; translations and uniform scaling leave them unchanged. Under
+    // vertex_positions perturbations the stored vertex normals are held fixed (they are mesh data).
+    Vec3<Var> normal(uint32_t v) const {
+        const Vec3f n0 = shape.mesh.normals[v];
+        Vec3<Var> n(n0);
+        for (const Motion& m : motions)
+            if (m.kind == Parameter::Kind::Rotate) n += Vec3<Var>(cross(m.vector, n0)) * Var::parameter(0.f, m.index);
+        return n;
+    }
+};
+
+// X(·, θ) for every shape and the camera.
+class MaterialForm {
+public:
+    explicit MaterialForm(const Parameters& params) : params_(params) {}
+
+    // The spatial interaction x = X(p, θ) at the material point of `hit` (wi and t are left unset).
+    SurfaceInteraction<Var> vertex(const SurfaceInteraction3f& hit) const {
+        return surface_interaction<Var>(*hit.shape, hit.prim_index, hit.bary, vertices(*hit.shape));
+    }
+    // J(p) = |(x1 - x0) × (x2 - x0)| / |(p1 - p0) × (p2 - p0)| for the triangle of `hit` (exact: X is affine on it).
+    Var jacobian(const SurfaceInteraction3f& hit) const {
+        const MovedVertices moved = vertices(*hit.shape);
+        const uint32_t* i = &hit.shape->mesh.indices[3 * size_t(hit.prim_index)];
+        const Vec3<Var> x0 = moved.position(i[0]);
+        const Var area = norm(cross(moved.position(i[1]) - x0, moved.position(i[2]) - x0));
+        return area / Var(area.v);
+    }
+    // A world point as seen by the moving camera: the camera's motion applied inversely to the point
+    // (first order at θ = 0), so that the reference camera's projection can be used.
+    Vec3<Var> to_reference_camera(const Vec3<Var>& x, const Vec3f& camera_position) const {
+        Vec3<Var> y = x;
+        for (const Motion& m : params_.sensor_motions()) {
+            const Var theta = Var::parameter(0.f, m.index);
+            if (m.kind == Parameter::Kind::Translate) y -= Vec3<Var>(m.vector) * theta;
+            else y -= Vec3<Var>(cross(m.vector, Vec3f(x.x.v, x.y.v, x.z.v) - camera_position)) * theta;
+        }
+        return y;
+    }
+    // Directions rotate with the camera too (normals used by the film Jacobian).
+    Vec3<Var> direction_to_reference_camera(const Vec3<Var>& d) const {
+        Vec3<Var> y = d;
+        for (const Motion& m : params_.sensor_motions())
+            if (m.kind == Parameter::Kind::Rotate)
+                y -= Vec3<Var>(cross(m.vector, Vec3f(d.x.v, d.y.v, d.z.v))) * Var::parameter(0.f, m.index);
+        return y;
+    }
+
+    // The inverse: a direction in the reference camera's frame back to the world (the camera's rotation applied).
+    Vec3<Var> direction_from_reference_camera(const Vec3<Var>& d) const {
+        Vec3<Var> y = d;
+        for (const Motion& m : params_.sensor_motions())
+            if (m.kind == Parameter::Kind::Rotate)
+                y += Vec3<Var>(cross(m.vector, Vec3f(d.x.v, d.y.v, d.z.v))) * Var::parameter(0.f, m.index);
+        return y;
+    }
+
+private:
+    MovedVertices vertices(const Shape& shape) const { return {shape, params_.motions(&shape)}; }
+    const Parameters& params_;
+};
+
+} // namespace penumbra

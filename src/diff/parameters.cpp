@@ -1,0 +1,291 @@
+#include "diff/parameters.h"
+
+#include <algorithm>
+#include <set>
+#include <sstream>
+
+namespace penumbra {
+
+namespace {
+
+std::string join(const std::string& prefix, const std::string& name) {
+    if (name.empty()) return prefix;
+    return prefix.empty() ? name : prefix + "." + name;
+}
+
+// Walks traverse() recursively, naming parameters after their owners (Mitsuba 3 conventions).
+class Collector final : public ParamVisitor {
+public:
+    Collector(std::vector<Parameter>& out, std::set<const Object*>& seen, std::string prefix, Object* owner)
+        : out_(out), seen_(seen), prefix_(std::move(prefix)), owner_(owner) {}
+
+    void put(const std::string& name, float* values, int size, int* index, bool geometry) override {
+        Parameter p;
+        p.name = join(prefix_, name);
+        p.data = values;
+        p.size = size;
+        p.index = index;
+        p.geometry = geometry;
+        p.shape = dynamic_cast<Shape*>(owner_);
+        out_.push_back(std::move(p));
+    }
+    void put_object(const std::string& name, Object* object) override { visit(object, join(prefix_, name)); }
+
+    void visit(Object* object, const std::string& fallback_name) {
+        if (!object || !seen_.insert(object).second) return;
+        Collector child(out_, seen_, object->id.empty() ? fallback_name : object->id, object);
+        object->traverse(child);
+    }
+
+private:
+    std::vector<Parameter>& out_;
+    std::set<const Object*>& seen_;
+    std::string prefix_;
+    Object* owner_;
+};
+
+// Levenshtein distance, for "did you mean" suggestions.
+size_t edit_distance(const std::string& a, const std::string& b) {
+    std::vector<size_t> row(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+        size_t diag = row[0];
+        row[0] = i;
+        for (size_t j = 1; j <= b.size(); ++j) {
+            const size_t up = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+            diag = up;
+        }
+    }
+    return row[b.size()];
+}
+
+std::string shape_name(const Shape& shape, size_t index) {
+    return shape.id.empty() ? "shape_" + std::to_string(index) : shape.id;
+}
+
+Vec3f bbox_center(const TriangleMesh& mesh) {
+    Vec3f lo(Infinity), hi(-Infinity);
+    for (const Vec3f& p : mesh.positions) {
+        lo = min(lo, p);
+        hi = max(hi, p);
+    }
+    return (lo + hi) * 0.5f;
+}
+
+// Rodrigues rotation of v about the unit axis a by angle t.
+Vec3f rotate(const Vec3f& v, const Vec3f& a, float t) {
+    const float c = std::cos(t), s = std::sin(t);
+    return v * c + cross(a, v) * s + a * (dot(a, v) * (1.f - c));
+}
+
+} // namespace
+
+Parameters::Parameters(Scene& scene) {
+    std::set<const Object*> seen;
+    Collector root(all_, seen, "", nullptr);
+    // Objects with ids first, so that shared objects are named by their id wherever they are used.
+    for (const auto& [id, object] : scene.named_objects)
+        if (object->id == id) root.visit(object.get(), id);
+    for (size_t i = 0; i < scene.shapes.size(); ++i) root.visit(scene.shapes[i].get(), shape_name(*scene.shapes[i], i));
+    for (size_t i = 0; i < scene.emitters.size(); ++i) root.visit(scene.emitters[i].get(), "emitter_" + std::to_string(i));
+    add_motions(scene);
+    saved_sensor_ = scene.sensor->to_world;
+}
+
+Parameters::~Parameters() { disable_all(); }
+
+void Parameters::add_motions(Scene& scene) {
+    for (size_t i = 0; i < scene.shapes.size(); ++i) {
+        Shape* shape = scene.shapes[i].get();
+        const std::string name = shape_name(*shape, i);
+        for (auto [suffix, kind] : {std::pair{"translate", Parameter::Kind::Translate},
+                                    std::pair{"rotate", Parameter::Kind::Rotate}, std::pair{"scale", Parameter::Kind::Scale}}) {
+            Parameter p;
+            p.name = name + "." + suffix;
+            p.kind = kind;
+            p.geometry = true;
+            p.shape = shape;
+            all_.push_back(p);
+        }
+    }
+    const std::string camera = scene.sensor->id.empty() ? "sensor" : scene.sensor->id;
+    for (auto [suffix, kind] : {std::pair{"translate", Parameter::Kind::Translate}, std::pair{"rotate", Parameter::Kind::Rotate}}) {
+        Parameter p;
+        p.name = camera + "." + suffix;
+        p.kind = kind;
+        p.sensor = true;
+        all_.push_back(p);
+    }
+}
+
+const Parameter& Parameters::find(const std::string& name) const {
+    for (const Parameter& p : all_)
+        if (p.name == name) return p;
+    std::vector<std::pair<size_t, std::string>> close;
+    for (const Parameter& p : all_) close.emplace_back(edit_distance(name, p.name), p.name);
+    std::sort(close.begin(), close.end());
+    std::string hint;
+    for (size_t i = 0; i < std::min<size_t>(3, close.size()); ++i) hint += (i ? ", " : "") + close[i].second;
+    throw Error("unknown parameter '" + name + "'" + (hint.empty() ? "" : " (did you mean: " + hint + "?)") +
+                "; `penumbra params` lists them");
+}
+
+void Parameters::disable_all() {
+    for (auto& [p, index] : enabled_)
+        if (p->index) *p->index = -1;
+    enabled_.clear();
+    direction_.clear();
+    dimension_ = 0;
+    shape_motions_.clear();
+    sensor_motions_.clear();
+}
+
+void Parameters::enable(const std::vector<std::pair<std::string, std::vector<float>>>& selection) {
+    disable_all();
+    std::set<std::string> names;
+    for (const auto& [name, dir] : selection) {
+        if (!names.insert(name).second) throw Error("parameter '" + name + "' is selected twice");
+        const Parameter& p = find(name);
+        const int index = dimension_;
+        enabled_.emplace_back(&p, index);
+        dimension_ += p.size;
+        if (p.kind == Parameter::Kind::Data) {
+            *p.index = index;
+            if (dir.empty()) direction_.insert(direction_.end(), p.size, 1.f);
+            else if (int(dir.size()) == p.size) direction_.insert(direction_.end(), dir.begin(), dir.end());
+            else if (dir.size() == 1) direction_.insert(direction_.end(), p.size, dir[0]);
+            else if (dir.size() == 3 && p.size % 3 == 0)
+                for (int k = 0; k < p.size; ++k) direction_.push_back(dir[k % 3]);
+            else
+                throw Error("parameter '" + name + "' has " + std::to_string(p.size) + " values; its direction needs " +
+                            std::to_string(p.size) + ", 3 (per 3-vector) or 1 value(s), got " + std::to_string(dir.size()));
+            continue;
+        }
+        // Motions: θ is a scalar; the vector says which way.
+        direction_.push_back(1.f);
+        Motion m{p.kind, Vec3f(0.f), Vec3f(0.f), index};
+        if (p.kind != Parameter::Kind::Scale) {
+            if (dir.empty()) m.vector = p.kind == Parameter::Kind::Rotate ? Vec3f(0, 1, 0) : Vec3f(1, 0, 0);
+            else if (dir.size() == 3) m.vector = Vec3f(dir[0], dir[1], dir[2]);
+            else throw Error("motion '" + name + "' takes a 3-vector (e.g. " + name + "=0,1,0)");
+            if (p.kind == Parameter::Kind::Rotate) {
+                if (squared_norm(m.vector) == 0.f) throw Error("motion '" + name + "': the rotation axis is zero");
+                m.vector = normalize(m.vector);
+            }
+        } else if (!dir.empty()) {
+            throw Error("motion '" + name + "' (uniform scaling) takes no direction");
+        }
+        if (p.sensor) {
+            sensor_motions_.push_back(m);
+        } else {
+            m.center = bbox_center(p.shape->mesh);
+            shape_motions_[p.shape].push_back(m);
+        }
+    }
+}
+
+void Parameters::enable_all_data() {
+    std::vector<std::pair<std::string, std::vector<float>>> selection;
+    for (const Parameter& p : all_)
+        if (p.kind == Parameter::Kind::Data) selection.emplace_back(p.name, std::vector<float>{});
+    enable(selection);
+}
+
+const std::vector<Motion>& Parameters::motions(const Shape* shape) const {
+    static const std::vector<Motion> none;
+    auto it = shape_motions_.find(shape);
+    return it == shape_motions_.end() ? none : it->second;
+}
+
+void Parameters::displace(Scene& scene, double t) {
+    // 1. Remember the reference configuration of everything that will move, and restore it.
+    std::set<Shape*> moved;
+    for (const auto& [p, index] : enabled_) {
+        if (p->kind == Parameter::Kind::Data) saved_data_.try_emplace(p->data, p->data, p->data + p->size);
+        if (p->shape && p->geometry) moved.insert(p->shape);
+    }
+    for (Shape* shape : moved) saved_meshes_.try_emplace(shape, shape->mesh.positions, shape->mesh.normals);
+    for (auto& [data, values] : saved_data_) std::copy(values.begin(), values.end(), data);
+    for (auto& [shape, mesh] : saved_meshes_) {
+        std::copy(mesh.first.begin(), mesh.first.end(), shape->mesh.positions.begin());
+        std::copy(mesh.second.begin(), mesh.second.end(), shape->mesh.normals.begin());
+    }
+    // 2. Data parameters move linearly along their direction.
+    for (const auto& [p, index] : enabled_)
+        if (p->kind == Parameter::Kind::Data)
+            for (int k = 0; k < p->size; ++k) p->data[k] += float(t * direction_[index + k]);
+    // 3. Motions, exactly (finite θ = t), on top.
+    const float theta = float(t);
+    for (Shape* shape : moved) {
+        for (const Motion& m : motions(shape)) {
+            for (Vec3f& x : shape->mesh.positions) {
+                if (m.kind == Parameter::Kind::Translate) x += m.vector * theta;
+                else if (m.kind == Parameter::Kind::Rotate) x = m.center + rotate(x - m.center, m.vector, theta);
+                else x = m.center + (x - m.center) * (1.f + theta);
+            }
+            if (m.kind == Parameter::Kind::Rotate)
+                for (Vec3f& n : shape->mesh.normals) n = rotate(n, m.vector, theta);
+        }
+        shape->finalize();
+    }
+    Transform to_world = saved_sensor_;
+    const Vec3f origin = saved_sensor_.apply_point(Vec3f(0.f));
+    for (const Motion& m : sensor_motions_) {
+        if (m.kind == Parameter::Kind::Translate)
+            to_world = Transform::translate(m.vector * theta) * to_world;
+        else
+            to_world = Transform::translate(origin) * Transform::rotate(m.vector, degrees(theta)) *
+                       Transform::translate(-origin) * to_world;
+    }
+    if (!sensor_motions_.empty() || !(scene.sensor->to_world.matrix == to_world.matrix))
+        scene.sensor->set_transform(to_world);
+    if (!moved.empty()) scene.build();
+}
+
+std::vector<float> Parameters::values() const {
+    std::vector<float> v(size_t(dimension_), 0.f);
+    for (const auto& [p, index] : enabled_)
+        if (p->kind == Parameter::Kind::Data) std::copy(p->data, p->data + p->size, v.begin() + index);
+    return v;
+}
+
+void Parameters::set_values(Scene& scene, const std::vector<float>& values) {
+    if (values.size() != size_t(dimension_))
+        throw Error("set_values: expected " + std::to_string(dimension_) + " values, got " + std::to_string(values.size()));
+    std::set<Shape*> moved;
+    for (const auto& [p, index] : enabled_) {
+        if (p->kind != Parameter::Kind::Data) throw Error("set_values: '" + p->name + "' is a motion; use displace()");
+        for (int k = 0; k < p->size; ++k)
+            if (!std::isfinite(values[index + k])) throw Error("set_values: non-finite value for '" + p->name + "'");
+        std::copy(values.begin() + index, values.begin() + index + p->size, p->data);
+        if (p->geometry && p->shape) moved.insert(p->shape);
+    }
+    for (Shape* shape : moved) shape->finalize();
+    if (!moved.empty()) scene.build();
+    saved_data_.clear(); // the new values are the reference configuration from now on
+    saved_meshes_.clear();
+}
+
+std::pair<std::string, std::vector<float>> parse_param_selection(const std::string& text) {
+    const size_t eq = text.find('=');
+    std::pair<std::string, std::vector<float>> result{text.substr(0, eq), {}};
+    if (eq == std::string::npos) return result;
+    std::stringstream list(text.substr(eq + 1));
+    std::string item;
+    while (std::getline(list, item, ',')) {
+        size_t used = 0;
+        float v = 0.f;
+        try {
+            v = std::stof(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used == 0 || item.find_first_not_of(" \t", used) != std::string::npos || !std::isfinite(v))
+            throw Error("--param " + text + ": '" + item + "' is not a finite number");
+        result.second.push_back(v);
+    }
+    return result;
+}
+
+} // namespace penumbra

@@ -1,0 +1,98 @@
+// Differentiable scene parameters: discovery with Mitsuba 3 `traverse` names, geometric motions, and the
+// selection of the parameters (and the direction in parameter space) that an estimator differentiates.
+//
+// Names: an object with an `id` is named by it; nested objects append the name their parent gives them
+// (`plane.bsdf.reflectance`, `light.emitter.radiance`); objects without an id at the top level are named
+// `<kind>_<n>` (e.g. `shape_2`). Shared objects are listed once, under their id.
+// Motions (virtual scalar parameters θ with value 0 in the reference configuration, paper 001 §4.1):
+//   <shape>.translate  x -> x + θ d                 (d: a world-space vector)
+//   <shape>.rotate     x -> c + R(a, θ)(x - c)      (a: world axis, c: the shape's bounding-box center; θ in radians)
+//   <shape>.scale      x -> c + (1 + θ)(x - c)      (uniform, about the bounding-box center)
+//   <sensor>.translate / <sensor>.rotate            the camera moves (world axes; rotation about its position)
+#pragma once
+#include "scene/scene.h"
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace penumbra {
+
+struct Parameter {
+    enum class Kind { Data, Translate, Rotate, Scale };
+    std::string name;
+    Kind kind = Kind::Data;
+    float* data = nullptr;  // Data: the values inside the scene object
+    int size = 1;           // number of scalars
+    int* index = nullptr;   // Data: where the object reads its parameter index (core/param.h)
+    bool geometry = false;  // changing it moves geometry (the BVH must be rebuilt)
+    Shape* shape = nullptr; // motions of shapes, and vertex_positions
+    bool sensor = false;    // motions of the camera
+};
+
+// A motion in use: which parameter index drives it and how (first-order form at θ = 0).
+struct Motion {
+    Parameter::Kind kind;
+    Vec3f vector; // translation direction or rotation axis
+    Vec3f center; // rotation / scaling center
+    int index;    // parameter index of θ
+};
+
+class Parameters {
+public:
+    explicit Parameters(Scene& scene);
+    ~Parameters();
+    Parameters(const Parameters&) = delete;
+    Parameters& operator=(const Parameters&) = delete;
+
+    const std::vector<Parameter>& all() const { return all_; }
+    // Throws Error naming the closest known names if `name` is unknown.
+    const Parameter& find(const std::string& name) const;
+
+    // Enables parameters for differentiation, each with a direction: `direction` has the parameter's size, or
+    // 3 values broadcast over an array of 3-vectors (colors, vertex positions), or 1 value broadcast; for
+    // translate it is the world vector, for rotate the world axis (empty: unit directions / +y axis).
+    // Indices are assigned contiguously in the given order. Disables everything enabled before.
+    void enable(const std::vector<std::pair<std::string, std::vector<float>>>& selection);
+    // Reverse mode: every Data parameter, with no direction.
+    void enable_all_data();
+    void disable_all();
+
+    // Dimension of the enabled parameter vector, and the direction (forward mode) in it.
+    int dimension() const { return dimension_; }
+    const std::vector<float>& direction() const { return direction_; }
+    // Enabled parameters with their first index.
+    const std::vector<std::pair<const Parameter*, int>>& enabled() const { return enabled_; }
+
+    // Motions driving a shape / the camera (empty when none is enabled).
+    const std::vector<Motion>& motions(const Shape* shape) const;
+    const std::vector<Motion>& sensor_motions() const { return sensor_motions_; }
+
+    // Values of the enabled parameters (motions read 0: they are displacements from the reference).
+    std::vector<float> values() const;
+    // Writes values of the enabled Data parameters into the scene (rebuilding the BVH when geometry changed);
+    // throws Error on non-finite values or motions (use displace() for those).
+    void set_values(Scene& scene, const std::vector<float>& values);
+
+    // Moves the scene to θ0 + t·direction (t = 0 restores the reference configuration) and rebuilds the BVH
+    // when geometry moved. Used by finite differences.
+    void displace(Scene& scene, double t);
+
+private:
+    void add_motions(Scene& scene);
+    std::vector<Parameter> all_;
+    std::vector<std::pair<const Parameter*, int>> enabled_;
+    std::vector<float> direction_;
+    int dimension_ = 0;
+    std::map<const Shape*, std::vector<Motion>> shape_motions_;
+    std::vector<Motion> sensor_motions_;
+    // Reference values of everything displace() may change.
+    std::map<float*, std::vector<float>> saved_data_;
+    std::map<Shape*, std::pair<std::vector<Vec3f>, std::vector<Vec3f>>> saved_meshes_;
+    Transform saved_sensor_;
+};
+
+// Parses "name" or "name=v1,v2,..." (the CLI's --param syntax).
+std::pair<std::string, std::vector<float>> parse_param_selection(const std::string& text);
+
+} // namespace penumbra

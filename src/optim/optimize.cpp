@@ -1,0 +1,378 @@
+#include "optim/optimize.h"
+
+#include "core/error.h"
+#include "core/plot.h"
+#include "diff/interior.h"
+#include "diff/parameters.h"
+#include "optim/adam.h"
+#include "render/render.h"
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+namespace penumbra {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// ---------------------------------------------------------------------------------------------------------------
+// Configuration
+namespace {
+
+std::string type_name(const json& j) { return j.is_number() ? "number" : j.type_name(); }
+
+// Reads the keys of one JSON object; every key must be read, so that a typo is an error, not a default.
+class ConfigObject {
+public:
+    ConfigObject(const json& j, std::string where, const std::string& source) : j_(j), where_(std::move(where)), source_(source) {
+        if (!j.is_object()) fail(where_.empty() ? "the configuration" : "'" + where_ + "'", "an object", j);
+    }
+
+    const json* find(const std::string& key, bool required) {
+        known_.insert(key);
+        auto it = j_.find(key);
+        if (it == j_.end()) {
+            if (required) throw Error(source_ + ": missing key '" + path(key) + "'");
+            return nullptr;
+        }
+        return &*it;
+    }
+    bool has(const std::string& key) const { return j_.contains(key); }
+
+    double number(const std::string& key, double fallback, bool required = false) {
+        const json* v = find(key, required);
+        if (!v) return fallback;
+        if (!v->is_number()) fail(key, "a number", *v);
+        return v->get<double>();
+    }
+    int64_t integer(const std::string& key, int64_t fallback, int64_t min, bool required = false) {
+        const json* v = find(key, required);
+        if (!v) return fallback;
+        if (!v->is_number_integer()) fail(key, "an integer", *v);
+        const int64_t i = v->get<int64_t>();
+        if (i < min) throw Error(source_ + ": key '" + path(key) + "' must be at least " + std::to_string(min));
+        return i;
+    }
+    std::string string(const std::string& key, const std::string& fallback, bool required = false) {
+        const json* v = find(key, required);
+        if (!v) return fallback;
+        if (!v->is_string()) fail(key, "a string", *v);
+        return v->get<std::string>();
+    }
+    // A number (1 value) or an array of numbers.
+    std::vector<float> values(const std::string& key) {
+        const json* v = find(key, true);
+        std::vector<float> out;
+        if (v->is_number()) return {v->get<float>()};
+        if (!v->is_array() || v->empty()) fail(key, "a number or a non-empty array of numbers", *v);
+        for (const json& e : *v) {
+            if (!e.is_number()) fail(key, "an array of numbers", *v);
+            out.push_back(e.get<float>());
+        }
+        return out;
+    }
+
+    // Rejects every key that was not read.
+    void finish() const {
+        for (auto it = j_.begin(); it != j_.end(); ++it)
+            if (!known_.count(it.key())) {
+                std::string expected;
+                for (const std::string& k : known_) expected += (expected.empty() ? "" : ", ") + k;
+                throw Error(source_ + ": unknown key '" + path(it.key()) + "' (expected: " + expected + ")");
+            }
+    }
+
+    std::string path(const std::string& key) const { return where_.empty() ? key : where_ + "." + key; }
+    [[noreturn]] void fail(const std::string& key, const std::string& expected, const json& got) const {
+        throw Error(source_ + ": key '" + path(key) + "': expected " + expected + ", got " + type_name(got));
+    }
+
+private:
+    const json& j_;
+    std::string where_;
+    const std::string& source_;
+    std::set<std::string> known_;
+};
+
+OptimizedParameter parse_parameter(const std::string& name, const json& j, const std::string& where,
+                                   const std::string& source) {
+    ConfigObject o(j, where, source);
+    OptimizedParameter p;
+    p.name = name;
+    if (o.has("init")) p.init = o.values("init");
+    p.learning_rate = o.number("lr", 0.0, true);
+    if (!(p.learning_rate > 0.0)) throw Error(source + ": key '" + o.path("lr") + "' must be positive");
+    if (const json* b = o.find("bounds", false)) {
+        if (!b->is_array() || b->size() != 2) o.fail("bounds", "[lower, upper] (numbers or null)", *b);
+        for (int k = 0; k < 2; ++k) {
+            const json& e = (*b)[size_t(k)];
+            if (e.is_null()) continue;
+            if (!e.is_number()) o.fail("bounds", "[lower, upper] (numbers or null)", *b);
+            (k == 0 ? p.lower : p.upper) = e.get<double>();
+        }
+        if (!(p.lower <= p.upper)) throw Error(source + ": key '" + o.path("bounds") + "': lower > upper");
+    }
+    o.finish();
+    return p;
+}
+
+std::string resolve(const std::string& base_dir, const std::string& path) {
+    return fs::path(path).is_absolute() ? path : (fs::path(base_dir) / path).lexically_normal().string();
+}
+
+} // namespace
+
+OptimizeConfig parse_optimize_config(const json& j, const std::string& base_dir, const std::string& source) {
+    ConfigObject root(j, "", source);
+    OptimizeConfig c;
+    c.scene = resolve(base_dir, root.string("scene", "", true));
+    if (const json* d = root.find("defines", false)) {
+        if (!d->is_object()) root.fail("defines", "an object", *d);
+        for (auto it = d->begin(); it != d->end(); ++it) {
+            if (it->is_string()) c.defines[it.key()] = it->get<std::string>();
+            else if (it->is_number()) c.defines[it.key()] = it->dump();
+            else root.fail("defines." + it.key(), "a string or a number", *it);
+        }
+    }
+    const json* params = root.find("parameters", true);
+    if (!params->is_object() || params->empty()) root.fail("parameters", "a non-empty object", *params);
+    for (auto it = params->begin(); it != params->end(); ++it)
+        c.parameters.push_back(parse_parameter(it.key(), *it, "parameters." + it.key(), source));
+
+    ConfigObject target(*root.find("target", true), "target", source);
+    if (target.has("image") == target.has("values"))
+        throw Error(source + ": key 'target' needs exactly one of 'image' or 'values'");
+    if (target.has("image")) {
+        c.target_image = resolve(base_dir, target.string("image", ""));
+    } else {
+        ConfigObject values(*target.find("values", true), "target.values", source);
+        for (const OptimizedParameter& p : c.parameters)
+            if (values.has(p.name)) c.target_values[p.name] = values.values(p.name);
+        values.finish(); // a target value for a parameter that is not optimized is an error
+        c.target_spp = int(target.integer("spp", c.target_spp, 1));
+    }
+    target.finish();
+
+    c.loss = parse_loss_kind(root.string("loss", "l2"));
+    c.iterations = int(root.integer("iterations", c.iterations, 0));
+    c.spp = int(root.integer("spp", c.spp, 1));
+    c.gradient_spp = int(root.integer("gradient_spp", c.gradient_spp, 1));
+    c.seed = uint64_t(root.integer("seed", 0, 0));
+    c.output = root.string("output", c.output);
+    c.snapshot_every = int(root.integer("snapshot_every", c.snapshot_every, 0));
+    c.lr_decay = root.number("lr_decay", c.lr_decay);
+    if (!(c.lr_decay > 0.0 && c.lr_decay <= 1.0)) throw Error(source + ": key 'lr_decay' must be in (0, 1]");
+    c.threads = int(root.integer("threads", 0, 0));
+    root.finish();
+    return c;
+}
+
+OptimizeConfig load_optimize_config(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw Error("cannot open optimization config '" + path + "'");
+    json j;
+    try {
+        j = json::parse(in);
+    } catch (const json::parse_error& e) {
+        throw Error(path + ": invalid JSON: " + e.what());
+    }
+    return parse_optimize_config(j, fs::path(path).parent_path().string(), path);
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// The loop
+namespace {
+
+// SplitMix64: independent sample streams for the target, each primal and each gradient.
+uint64_t stream_seed(uint64_t seed, uint64_t stream) {
+    uint64_t z = seed * 0x9E3779B97F4A7C15ULL + stream + 0x632BE59BD9B4E019ULL;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    return z ^ (z >> 31);
+}
+
+// A parameter's values from the config: its size, or 1 value broadcast.
+std::vector<double> expand(const std::string& name, const std::vector<float>& v, int size) {
+    if (int(v.size()) == size) return {v.begin(), v.end()};
+    if (v.size() == 1) return std::vector<double>(size_t(size), double(v[0]));
+    throw Error("parameter '" + name + "' has " + std::to_string(size) + " values; got " + std::to_string(v.size()));
+}
+
+std::vector<float> to_float(const std::vector<double>& v) { return {v.begin(), v.end()}; }
+
+std::vector<double> slice(const std::vector<double>& v, int offset, int size) {
+    return {v.begin() + offset, v.begin() + offset + size};
+}
+
+Image render_image(const Scene& scene, int spp, uint64_t seed, int threads) {
+    RenderOptions options;
+    options.spp = spp;
+    options.seed = seed;
+    options.threads = threads;
+    return render(scene, options);
+}
+
+std::string snapshot_name(int iteration) {
+    char buf[32];
+    std::snprintf(buf, sizeof(buf), "iter_%04d.png", iteration);
+    return buf;
+}
+
+// CSV columns: iteration, loss, parameter_error, seconds, then every optimized scalar.
+class CsvLog {
+public:
+    CsvLog(const fs::path& path, const Parameters& params) : out_(path) {
+        if (!out_) throw Error("cannot write '" + path.string() + "'");
+        out_ << "iteration,loss,parameter_error,seconds";
+        for (const auto& [p, offset] : params.enabled())
+            for (int k = 0; k < p->size; ++k) out_ << "," << p->name << (p->size > 1 ? "[" + std::to_string(k) + "]" : "");
+        out_ << "\n";
+    }
+    void write(const IterationRecord& r, const std::vector<double>& x) {
+        char buf[128];
+        std::snprintf(buf, sizeof(buf), "%d,%.9g,", r.iteration, r.loss);
+        out_ << buf;
+        if (std::isfinite(r.parameter_error)) out_ << std::to_string(r.parameter_error);
+        std::snprintf(buf, sizeof(buf), ",%.3f", r.seconds);
+        out_ << buf;
+        for (double v : x) {
+            std::snprintf(buf, sizeof(buf), ",%.7g", v);
+            out_ << buf;
+        }
+        out_ << "\n" << std::flush;
+    }
+
+private:
+    std::ofstream out_;
+};
+
+void write_result_json(const fs::path& path, const OptimizeResult& result) {
+    json j;
+    j["final_parameter_error"] = std::isfinite(result.final_parameter_error) ? json(result.final_parameter_error) : json();
+    j["seconds"] = result.seconds;
+    for (const ParameterResult& p : result.parameters) {
+        json e{{"initial", p.initial}, {"final", p.final}};
+        if (!p.truth.empty()) e["truth"] = p.truth, e["relative_error"] = p.relative_error;
+        j["parameters"][p.name] = e;
+    }
+    std::ofstream out(path);
+    out << j.dump(2) << "\n";
+    if (!out) throw Error("cannot write '" + path.string() + "'");
+}
+
+} // namespace
+
+double relative_distance(const std::vector<double>& a, const std::vector<double>& b) {
+    double d2 = 0, b2 = 0;
+    for (size_t k = 0; k < a.size(); ++k) d2 += (a[k] - b[k]) * (a[k] - b[k]), b2 += b[k] * b[k];
+    return b2 > 0 ? std::sqrt(d2 / b2) : std::sqrt(d2);
+}
+
+OptimizeResult optimize(const OptimizeConfig& config, const std::function<void(const IterationRecord&)>& on_iteration) {
+    auto scene = load_scene(config.scene, config.defines);
+    Parameters params(*scene);
+    std::vector<std::pair<std::string, std::vector<float>>> selection;
+    for (const OptimizedParameter& p : config.parameters) selection.emplace_back(p.name, std::vector<float>{});
+    params.enable(selection);
+    for (const auto& [p, offset] : params.enabled())
+        if (p->kind != Parameter::Kind::Data)
+            throw Error("parameter '" + p->name + "' is a motion; optimize only material/emitter data for now");
+
+    // Adam groups, truth and initial values, in the enabled order.
+    std::vector<AdamGroup> groups;
+    const std::vector<float> scene_values = params.values();
+    std::vector<double> truth(scene_values.begin(), scene_values.end()), x = truth;
+    for (size_t i = 0; i < config.parameters.size(); ++i) {
+        const OptimizedParameter& op = config.parameters[i];
+        const auto [p, offset] = params.enabled()[i];
+        groups.push_back({op.name, offset, p->size, op.learning_rate, op.lower, op.upper});
+        if (auto it = config.target_values.find(op.name); it != config.target_values.end()) {
+            const std::vector<double> v = expand(op.name, it->second, p->size);
+            std::copy(v.begin(), v.end(), truth.begin() + offset);
+        }
+        const std::vector<double> init = op.init.empty() ? slice(truth, offset, p->size) : expand(op.name, op.init, p->size);
+        std::copy(init.begin(), init.end(), x.begin() + offset);
+    }
+    Adam adam(groups, params.dimension());
+    adam.project(x);
+    const std::vector<double> x_initial = x;
+
+    fs::create_directories(config.output);
+    const fs::path out(config.output);
+    OptimizeResult result;
+    const bool known_truth = config.target_image.empty();
+
+    // Target: an image, or the scene at the true values rendered with many samples (stream 0).
+    Image target;
+    const auto target_start = std::chrono::steady_clock::now();
+    if (known_truth) {
+        params.set_values(*scene, to_float(truth));
+        target = render_image(*scene, config.target_spp, stream_seed(config.seed, 0), config.threads);
+        write_image((out / "target.exr").string(), target);
+        write_image((out / "target.png").string(), target);
+    } else {
+        target = read_image(config.target_image);
+    }
+    result.target_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - target_start).count();
+    params.set_values(*scene, to_float(x));
+
+    DiffOptions diff;
+    diff.spp = config.gradient_spp;
+    diff.threads = config.threads;
+    diff.path = path_settings(*scene);
+    CsvLog log(out / "log.csv", params);
+    const auto start = std::chrono::steady_clock::now();
+    auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+
+    for (int it = 0; it < config.iterations; ++it) {
+        // The primal (stream 2i+1) gives the loss and the adjoint ∂L/∂I; the gradient uses independent samples
+        // (stream 2i+2): for a nonlinear loss, E[∂L/∂I(Î)] · E[dÎ/dθ] is unbiased only if the two are independent.
+        const Image primal = render_image(*scene, config.spp, stream_seed(config.seed, 2 * uint64_t(it) + 1), config.threads);
+        const LossResult loss = compute_loss(config.loss, primal, target);
+        IterationRecord record{it, loss.value, known_truth ? relative_distance(x, truth) : NAN, 0.0};
+        if (config.snapshot_every > 0 && it % config.snapshot_every == 0)
+            write_image((out / snapshot_name(it)).string(), primal);
+
+        diff.seed = stream_seed(config.seed, 2 * uint64_t(it) + 2);
+        const Gradient gradient = render_gradient(*scene, params, loss.adjoint, diff);
+        // Exponential schedule: the rates fall to lr_decay × lr at the last iteration.
+        const double lr_scale = config.iterations > 1 ? std::pow(config.lr_decay, double(it) / (config.iterations - 1)) : 1.0;
+        const std::vector<double> x_before = x;
+        adam.step(x, gradient.values, lr_scale);
+        params.set_values(*scene, to_float(x));
+
+        record.seconds = elapsed();
+        log.write(record, x_before);
+        result.history.push_back(record);
+        if (on_iteration) on_iteration(record);
+    }
+    result.seconds = elapsed();
+
+    write_image((out / "final.png").string(),
+                render_image(*scene, config.spp, stream_seed(config.seed, 2 * uint64_t(config.iterations) + 1), config.threads));
+    for (size_t i = 0; i < config.parameters.size(); ++i) {
+        const auto [p, offset] = params.enabled()[i];
+        ParameterResult pr{p->name, slice(x_initial, offset, p->size), slice(x, offset, p->size), {}, NAN};
+        if (known_truth) {
+            pr.truth = slice(truth, offset, p->size);
+            pr.relative_error = relative_distance(pr.final, pr.truth);
+        }
+        result.parameters.push_back(std::move(pr));
+    }
+    if (known_truth) result.final_parameter_error = relative_distance(x, truth);
+    write_result_json(out / "result.json", result);
+
+    PlotSeries curve{"loss (" + loss_kind_name(config.loss) + ")", {}, {}};
+    for (const IterationRecord& r : result.history) curve.x.push_back(r.iteration), curve.y.push_back(r.loss);
+    if (!result.history.empty())
+        write_plot((out / "loss.png").string(), {curve}, {"Inverse rendering: loss", "iteration", "loss", true, 720, 440});
+    return result;
+}
+
+} // namespace penumbra

@@ -1,0 +1,94 @@
+// First inverse rendering: recover material and emitter parameters from a target image by Adam on the gradient
+// of an image loss (interior term, diff/interior.h). Driven by a JSON configuration (docs/optimize.md):
+//
+//   scene           string     scene file, relative to the configuration file
+//   defines         object     <default> overrides, name → string or number
+//   parameters      object     name → {"init": number | [values], "lr": number, "bounds": [lo | null, hi | null]}
+//                              ("init" defaults to the scene's value, "bounds" to none)
+//   target          object     {"image": path relative to the configuration}  or
+//                              {"values": {name → number | [values]}, "spp": int}: the same scene with these
+//                              values of optimized parameters (the others keep the scene's), rendered at start
+//   loss            string     "l2" (default) | "rel_l2"
+//   iterations      int        number of Adam steps
+//   spp             int        samples per pixel of the primal image of each iteration
+//   gradient_spp    int        samples per pixel of the gradient (independent of the primal's)
+//   seed            int        base seed (default 0)
+//   output          string     output directory (default "optimize_out"), relative to the working directory
+//   snapshot_every  int        write iter_NNNN.png every N iterations (0 = never; default 10)
+//   lr_decay        number     learning-rate factor reached at the last iteration, decayed exponentially
+//                              (default 1: constant rates)
+//   threads         int        worker threads (0 = all; default 0)
+#pragma once
+#include "optim/loss.h"
+
+#include <nlohmann/json_fwd.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace penumbra {
+
+struct OptimizedParameter {
+    std::string name;
+    std::vector<float> init; // empty: the scene's value; 1 value: broadcast
+    double learning_rate = 0.01;
+    double lower = -std::numeric_limits<double>::infinity();
+    double upper = std::numeric_limits<double>::infinity();
+};
+
+struct OptimizeConfig {
+    std::string scene;                            // resolved path
+    std::map<std::string, std::string> defines;
+    std::vector<OptimizedParameter> parameters;
+    std::string target_image;                     // resolved path, or empty for a rendered target
+    std::map<std::string, std::vector<float>> target_values;
+    int target_spp = 1024;
+    LossKind loss = LossKind::L2;
+    int iterations = 100;
+    int spp = 16, gradient_spp = 16;
+    uint64_t seed = 0;
+    std::string output = "optimize_out";
+    int snapshot_every = 10;
+    double lr_decay = 1.0;
+    int threads = 0;
+};
+
+// Parses a configuration; relative paths resolve against `base_dir`. Unknown keys and wrong types throw Error
+// naming `source` and the key.
+OptimizeConfig parse_optimize_config(const nlohmann::json& json, const std::string& base_dir,
+                                     const std::string& source = "<config>");
+OptimizeConfig load_optimize_config(const std::string& path);
+
+struct IterationRecord {
+    int iteration = 0;
+    double loss = 0;
+    double parameter_error = std::numeric_limits<double>::quiet_NaN(); // ‖θ − θ*‖ / ‖θ*‖, NaN when θ* is unknown
+    double seconds = 0;                                                 // since the loop started
+};
+
+struct ParameterResult {
+    std::string name;
+    std::vector<double> initial, final, truth; // truth empty when unknown
+    double relative_error = std::numeric_limits<double>::quiet_NaN(); // ‖final − truth‖ / ‖truth‖
+};
+
+struct OptimizeResult {
+    std::vector<IterationRecord> history;
+    std::vector<ParameterResult> parameters;
+    double final_parameter_error = std::numeric_limits<double>::quiet_NaN();
+    double target_seconds = 0, seconds = 0;
+};
+
+// ‖a − b‖ / ‖b‖ (‖a − b‖ when b = 0).
+double relative_distance(const std::vector<double>& a, const std::vector<double>& b);
+
+// Runs the optimization; writes log.csv, snapshots, final.png, loss.png and result.json into config.output.
+// `on_iteration` is called after each iteration's loss is known.
+OptimizeResult optimize(const OptimizeConfig& config,
+                        const std::function<void(const IterationRecord&)>& on_iteration = {});
+
+} // namespace penumbra

@@ -1,0 +1,173 @@
+// Unidirectional path tracing with next-event estimation and MIS, written once for rendering (T = float on the
+// reference geometry) and for the interior term of the material-form differential path integral (T = Var on
+// the moving geometry, paper 001 §5.1).
+//
+// Paths are always sampled with float arithmetic in the reference configuration (MIS weights and Russian
+// roulette are detached). The measurement contribution is written in area measure, f(x̄) ∏ J / p(x̄):
+// each segment contributes  f_s(x_{i-1} ← x_i → x_{i+1}) G'(x_i, x_{i+1}) J(x_{i+1}) / (p_σ G'_0),
+// with G' = |n_{i+1} · ω| / |x_{i+1} - x_i|² and p_σ the solid-angle density the sampler used. In the reference
+// configuration G'/G'_0 = J = 1 and this is the usual estimator; `Geometry` supplies x_i(θ) and J.
+#pragma once
+#include "render/emitter_hit.h"
+#include "render/integrator.h"
+#include "render/mis.h"
+#include "scene/shape_interaction.h"
+
+#include <type_traits>
+
+namespace penumbra {
+
+struct PathSettings {
+    int max_depth = -1; // -1: infinite; 1: directly visible emitters only
+    int rr_depth = 5;
+    bool hide_emitters = false;
+};
+
+// v / detach(v): 1 with a derivative (the relative change of a quantity away from the reference configuration).
+template <typename T> inline T relative_change(const T& v) {
+    if constexpr (std::is_same_v<T, float>) return 1.f;
+    else return v / T(detach(v));
+}
+
+// The reference geometry: vertices are the float hits themselves.
+struct ReferenceGeometry {
+    const SurfaceInteraction3f& vertex(const SurfaceInteraction3f& hit) const { return hit; }
+    float jacobian(const SurfaceInteraction3f&) const { return 1.f; }
+};
+
+// Next-event contribution f_s L_e / p at x in material form (T = Var), for the emitter sample ds.
+template <typename T, typename Geometry>
+Color3<T> next_event_contribution(const BSDFContext& ctx, const BSDF* bsdf, const SurfaceInteraction<T>& si,
+                                  const DirectionSample3f& ds, const Geometry& geometry) {
+    using std::abs;
+    using std::sqrt;
+    const Emitter* emitter = ds.emitter;
+    if (const Shape* shape = emitter->shape()) {
+        // Area light at material point y: f_s L_e G'(x, y) J(y) / (p_σ G'_0).
+        const SurfaceInteraction3f light_hit =
+            surface_interaction<float>(*shape, ds.prim, ds.bary, MeshVertices{shape->mesh});
+        SurfaceInteraction<T> y = geometry.vertex(light_hit);
+        const Vec3<T> to_light = y.p - si.p;
+        const T dist2 = squared_norm(to_light);
+        const Vec3<T> wo = to_light / sqrt(dist2);
+        y.wi = y.to_local(-wo);
+        const T g = abs(dot(y.n, wo)) / dist2;
+        return bsdf->eval(ctx, si, si.to_local(wo)) * emitter->eval(y) *
+               (relative_change(g * geometry.jacobian(light_hit)) / T(ds.pdf));
+    }
+    const Vec3<T> wo(ds.d);
+    if (emitter->is_delta()) {
+        // Point, spot, directional: f_s times the emitter's incident term at x (Eq. 24); toward a point light
+        // the direction moves with x.
+        const Vec3<T> to_light = emitter->is_infinite() ? wo : normalize(Vec3<T>(ds.p) - si.p);
+        return bsdf->eval(ctx, si, si.to_local(to_light)) * emitter->eval_delta(si.p) / T(ds.pdf);
+    }
+    // Environment: a direction, independent of θ.
+    return bsdf->eval(ctx, si, si.to_local(wo)) * emitter->eval_environment(wo) / T(ds.pdf);
+}
+
+// Radiance leaving the first vertex of a path toward the sensor, estimated along one sampled path. `first` is
+// the intersection of `primary` (traced by the caller) and `first_si` the same vertex in T with its `wi`
+// (toward the sensor) set; for T = float it is `first` itself.
+template <typename T, typename Geometry>
+Color3<T> trace_path(const Scene& scene, Sampler& sampler, const Ray& primary, const SurfaceInteraction3f& first,
+                     const SurfaceInteraction<T>& first_si, const Geometry& geometry, const PathSettings& settings,
+                     RayCounter& rays) {
+    using std::abs;
+    using std::sqrt;
+    constexpr bool reference = std::is_same_v<T, float>;
+    const BSDFContext ctx{TransportMode::Radiance};
+    Color3<T> L(T(0)), throughput(T(1));
+    if (settings.max_depth == 0) return L;
+    const unsigned max_depth = unsigned(settings.max_depth); // -1 wraps to "infinite"
+    float eta = 1.f;
+
+    Ray ray = primary;
+    SurfaceInteraction3f hit = first, prev_hit;
+    Vec3<T> prev_position;
+    float prev_bsdf_pdf = 1.f;
+    bool prev_bsdf_delta = true;
+
+    for (unsigned depth = 0;; ++depth) {
+        // Emission reached by BSDF sampling (or directly visible), MIS-weighted against emitter sampling.
+        SurfaceInteraction<T> si;
+        if (depth == 0) {
+            si = first_si;
+        } else if (hit.is_valid()) {
+            si = geometry.vertex(hit);
+            if constexpr (reference) si.wi = hit.wi;
+            else si.wi = si.to_local(normalize(prev_position - si.p));
+        }
+        if (!(depth == 0 && settings.hide_emitters)) {
+            for_each_emitter_hit(scene, prev_hit, ray.d, hit, [&](const Emitter* e, const Color3f& Le, float emitter_pdf) {
+                const float w = prev_bsdf_delta ? 1.f : mis_power(prev_bsdf_pdf, emitter_pdf);
+                if constexpr (reference) L += throughput * Le * w;
+                else L += throughput * (hit.is_valid() ? e->eval(si) : e->eval_environment(Vec3<T>(ray.d))) * T(w);
+            });
+        }
+        if (!hit.is_valid() || depth + 1 >= max_depth) break;
+        const BSDF* bsdf = hit.bsdf();
+        if (!bsdf) break;
+
+        // Next-event estimation.
+        if (bsdf->has(BSDFSmooth) && !scene.emitters.empty()) {
+            const auto [ds, em_weight] = scene.sample_emitter_direction(hit, sampler.next_2d(), true);
+            ++rays.rays;
+            if (!is_black(em_weight)) {
+                Color3<T> contribution;
+                if constexpr (reference) {
+                    // In the reference configuration the emitter's sampling weight L_e/p is this same quantity.
+                    contribution = bsdf->eval(ctx, si, si.to_local(ds.d)) * em_weight;
+                } else {
+                    contribution = next_event_contribution(ctx, bsdf, si, ds, geometry);
+                }
+                const float w = ds.delta ? 1.f : mis_power(ds.pdf, bsdf->pdf(ctx, hit, hit.to_local(ds.d)));
+                L += throughput * contribution * T(w);
+            }
+        } else {
+            sampler.next_2d(); // keep the sample stream aligned across materials
+        }
+
+        // BSDF sampling in the reference configuration.
+        const float u1 = sampler.next_1d();
+        const auto [bs, weight] = bsdf->sample(ctx, hit, u1, sampler.next_2d());
+        if (is_black(weight)) break;
+        const Vec3f d = hit.to_world(bs.wo);
+        ray = hit.spawn_ray(d);
+        ++rays.rays;
+        const SurfaceInteraction3f next = scene.intersect(ray);
+        const bool delta = (bs.sampled_type & BSDFDelta) != 0;
+
+        if (delta || reference) {
+            // Reference: weight = f/p. Delta lobes fix the direction (the paper's assumption A.1 excludes them:
+            // no derivative flows through them).
+            throughput *= Color3<T>(weight);
+        } else if (next.is_valid()) {
+            const SurfaceInteraction<T> x2 = geometry.vertex(next);
+            const Vec3<T> to_next = x2.p - si.p;
+            const T dist2 = squared_norm(to_next);
+            const Vec3<T> wo = to_next / sqrt(dist2);
+            const T g = abs(dot(x2.n, wo)) / dist2;
+            throughput *= bsdf->eval(ctx, si, si.to_local(wo)) * (relative_change(g * geometry.jacobian(next)) / T(bs.pdf));
+        } else {
+            throughput *= bsdf->eval(ctx, si, si.to_local(Vec3<T>(d))) / T(bs.pdf);
+        }
+        eta *= bs.eta;
+        prev_hit = hit;
+        prev_position = si.p;
+        prev_bsdf_pdf = bs.pdf;
+        prev_bsdf_delta = delta;
+        hit = next;
+
+        // Russian roulette (Mitsuba 3: survival probability min(max(throughput)·eta², 0.95)), detached.
+        if (depth + 1 >= unsigned(settings.rr_depth)) {
+            const Color3f t(detach(throughput.x), detach(throughput.y), detach(throughput.z));
+            const float q = std::min(max_component(t) * eta * eta, 0.95f);
+            if (sampler.next_1d() >= q) break;
+            throughput /= T(q);
+        }
+    }
+    return L;
+}
+
+} // namespace penumbra

@@ -1,0 +1,73 @@
+// Checks a derivative image against central finite differences (common random numbers), with tolerances
+// derived from standard errors estimated from 16 independent batches of each estimator:
+//  - unbiasedness: |z| of the image mean < 4 (t with 15 dof: P(|t| > 4) ~ 1e-3);
+//  - per pixel: fewer than 2% of pixel channels with |D − R| > 4σ (expected ~0.1% if unbiased);
+//  - relerr = Σ|D − R| / Σ|R| below 1.5 × its pure-noise expectation sqrt(2/π) Σσ / Σ|R| (+0.02 for the
+//    O(h²) truncation error of the central difference).
+#pragma once
+#include "diff/finite_difference.h"
+#include "diff/interior.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+namespace penumbra::test {
+
+struct DiffCheck {
+    Comparison comparison;
+    double noise_relerr = 0;     // expected relerr from noise alone
+    double outliers_4sigma = 0;  // fraction of pixel channels beyond 4σ
+    bool passes() const {
+        return std::abs(comparison.mean_z) < 4.0 && outliers_4sigma < 0.02 &&
+               comparison.relerr < 1.5 * noise_relerr + 0.02;
+    }
+};
+
+inline DiffCheck check_against(const Image& d, const Image& d_se, const Image& fd, const Image& fd_se) {
+    DiffCheck c;
+    c.comparison = compare_images(d, fd, d_se, fd_se);
+    double sigma_sum = 0, ref_sum = 0;
+    int outliers = 0, n = 0;
+    for (size_t i = 0; i < fd.pixels.size(); ++i)
+        for (int k = 0; k < 3; ++k, ++n) {
+            const double s = std::hypot(double(d_se.pixels[i][k]), double(fd_se.pixels[i][k]));
+            sigma_sum += s;
+            ref_sum += std::abs(fd.pixels[i][k]);
+            if (std::abs(d.pixels[i][k] - fd.pixels[i][k]) > 4.0 * s) ++outliers;
+        }
+    c.noise_relerr = std::sqrt(2.0 / M_PI) * sigma_sum / ref_sum;
+    c.outliers_4sigma = double(outliers) / n;
+    return c;
+}
+
+struct DerivativePair {
+    DerivativeImage derivative;
+    FiniteDifference fd;
+};
+
+// Interior derivative and finite differences for the enabled parameters, 16 batches each.
+inline DerivativePair derivative_and_fd(Scene& scene, Parameters& params, int spp_derivative, int spp_fd, double h) {
+    // PENUMBRA_TEST_SEED re-runs the checks with other random numbers (to see that they do not pass by luck).
+    const char* env = std::getenv("PENUMBRA_TEST_SEED");
+    const uint64_t seed = env ? std::strtoull(env, nullptr, 10) : 0;
+    DiffOptions o;
+    o.spp = spp_derivative;
+    o.batches = 16;
+    o.seed = 7 + 1000 * seed;
+    o.path = path_settings(scene);
+    RenderOptions ro;
+    ro.spp = spp_fd;
+    ro.seed = 1234 + 1000 * seed;
+    return {render_derivative(scene, params, o), finite_difference(scene, params, h, ro, 16)};
+}
+
+inline std::string describe(const DiffCheck& c) {
+    return "relerr " + std::to_string(c.comparison.relerr) + " (noise " + std::to_string(c.noise_relerr) +
+           "), mean " + std::to_string(c.comparison.mean_test) + " vs fd " + std::to_string(c.comparison.mean_ref) +
+           ", z " + std::to_string(c.comparison.mean_z) + ", outliers(4σ) " + std::to_string(c.outliers_4sigma);
+}
+
+} // namespace penumbra::test
