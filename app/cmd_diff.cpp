@@ -4,11 +4,14 @@
 #include "core/colormap.h"
 #include "diff/finite_difference.h"
 #include "diff/interior.h"
+#include "diff/psdr.h"
 #include "scene/scene.h"
 
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <chrono>
+#include <filesystem>
 #include <fstream>
 
 namespace penumbra::cli {
@@ -17,10 +20,12 @@ namespace {
 
 struct Common {
     std::string scene;
+    std::string method = "psdr";
+    int boundary_spp = 4;
     std::vector<std::string> defines, params;
     int spp = 64, threads = 0, batches = 0;
     uint64_t seed = 0;
-    std::string output, stderr_output;
+    std::string output, stderr_output, terms_prefix;
     bool quiet = false;
 };
 
@@ -34,6 +39,26 @@ void add_common(CLI::App* cmd, Common& c, bool needs_params) {
     cmd->add_option("--seed", c.seed, "random seed");
     cmd->add_option("--threads", c.threads, "worker threads (default: all)")->check(CLI::NonNegativeNumber);
     cmd->add_flag("-q,--quiet", c.quiet, "no progress bar");
+}
+
+void add_method(CLI::App* cmd, Common& c) {
+    cmd->add_option("--method", c.method, "interior (material-form interior term only) or psdr (interior + boundary)")
+        ->check(CLI::IsMember({"interior", "psdr"}));
+    cmd->add_option("--boundary-spp", c.boundary_spp, "primary-boundary samples per pixel")->check(CLI::NonNegativeNumber);
+}
+
+// The terms' budgets from the command line (the sample count is split over the batches).
+PsdrOptions psdr_options(const Scene& scene, const Common& c, int batches, bool antithetic) {
+    PsdrOptions o;
+    o.interior.batches = batches;
+    o.interior.spp = c.spp / batches;
+    o.interior.seed = c.seed;
+    o.interior.threads = c.threads;
+    o.interior.antithetic = antithetic;
+    o.interior.path = path_settings(scene);
+    o.primary_spp = c.method == "psdr" ? std::max(1, c.boundary_spp / batches) : 0;
+    if (c.method == "psdr" && c.boundary_spp == 0) o.primary_spp = 0;
+    return o;
 }
 
 std::vector<std::pair<std::string, std::vector<float>>> selection(const std::vector<std::string>& params) {
@@ -85,21 +110,25 @@ void cmd_derivative(const Common& c, bool no_antithetic) {
     auto scene = load_scene(c.scene, parse_defines(c.defines));
     Parameters params(*scene);
     params.enable(selection(c.params));
-    DiffOptions o;
-    o.batches = batches_for(c);
-    o.spp = c.spp / o.batches;
-    o.seed = c.seed;
-    o.threads = c.threads;
-    o.antithetic = !no_antithetic;
-    o.path = path_settings(*scene);
+    PsdrOptions o = psdr_options(*scene, c, batches_for(c), !no_antithetic);
     ProgressBar bar(!c.quiet, "derivative");
-    o.progress = bar.callback();
-    const DerivativeImage d = render_derivative(*scene, params, o);
-    write_signed(c.output, d.derivative);
-    if (!c.stderr_output.empty()) write_image(c.stderr_output, d.stderr_img);
+    o.interior.progress = bar.callback();
+    const auto start = std::chrono::steady_clock::now();
+    const PsdrDerivative d = psdr_derivative(*scene, params, o);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const bool total = c.method == "psdr";
+    write_signed(c.output, total ? d.total : d.interior.derivative);
+    if (!c.stderr_output.empty()) write_image(c.stderr_output, total ? d.total_stderr : d.interior.stderr_img);
+    if (!c.terms_prefix.empty()) {
+        write_signed(c.terms_prefix + "_interior" + lower_extension(c.output), d.interior.derivative);
+        if (total) write_signed(c.terms_prefix + "_primary" + lower_extension(c.output), d.primary);
+    }
     const Film& film = *scene->sensor->film;
-    std::fprintf(stderr, "derivative (interior term) %dx%d at %d spp in %.2f s, mean %.6g -> %s\n", film.width,
-                 film.height, o.spp * o.batches, d.seconds, image_mean(d.derivative), c.output.c_str());
+    std::fprintf(stderr, "derivative (%s) %dx%d at %d spp%s in %.2f s, mean %.6g -> %s\n",
+                 total ? "interior + primary boundary" : "interior term", film.width, film.height,
+                 o.interior.spp * o.interior.batches,
+                 total ? (", " + std::to_string(o.primary_spp * o.interior.batches) + " boundary spp").c_str() : "",
+                 seconds, image_mean(total ? d.total : d.interior.derivative), c.output.c_str());
 }
 
 void cmd_fd(const Common& c, double eps) {
@@ -127,14 +156,10 @@ void cmd_gradient(const Common& c, const std::string& adjoint_path) {
     if (c.params.empty()) params.enable_all_data();
     else params.enable(selection(c.params));
     const Image adjoint = read_image(adjoint_path, false);
-    DiffOptions o;
-    o.spp = c.spp;
-    o.seed = c.seed;
-    o.threads = c.threads;
-    o.path = path_settings(*scene);
+    PsdrOptions o = psdr_options(*scene, c, 1, true);
     ProgressBar bar(!c.quiet, "gradient");
-    o.progress = bar.callback();
-    const Gradient g = render_gradient(*scene, params, adjoint, o);
+    o.interior.progress = bar.callback();
+    const Gradient g = psdr_gradient(*scene, params, adjoint, o);
     nlohmann::json out;
     out["seconds"] = g.seconds;
     out["spp"] = c.spp;
@@ -187,6 +212,8 @@ void add_diff_commands(CLI::App& app) {
     d->add_option("--stderr", deriv->stderr_output, "per-pixel standard-error image (.exr)");
     d->add_option("--batches", deriv->batches, "independent batches for --stderr (default 8)")->check(CLI::PositiveNumber);
     d->add_flag("--no-antithetic", *no_antithetic, "disable pixel-level antithetic sampling");
+    d->add_option("--terms", deriv->terms_prefix, "also write each term's image as PREFIX_interior / PREFIX_primary");
+    add_method(d, *deriv);
     d->callback([deriv, no_antithetic] { cmd_derivative(*deriv, *no_antithetic); });
 
     auto fd = std::make_shared<Common>();
@@ -205,6 +232,7 @@ void add_diff_commands(CLI::App& app) {
     add_common(g, *grad, false);
     g->add_option("--adjoint", *adjoint, "adjoint image ∂L/∂I (.exr, the film's size)")->required();
     g->add_option("-o,--output", grad->output, "gradient as JSON");
+    add_method(g, *grad);
     g->callback([grad, adjoint] { cmd_gradient(*grad, *adjoint); });
 
     auto cmp = std::make_shared<std::array<std::string, 4>>();

@@ -1,8 +1,11 @@
-// Primal throughput of `path` on a 200k-triangle scene, and raw Embree incoherent-ray throughput on the same
-// geometry in the same run; prints their ratio (rays cast by the integrator per second / raw rays per second).
+// On a 200k-triangle scene, in one run:
+//  - primal throughput of `path` and raw Embree incoherent-ray throughput on the same geometry (their ratio);
+//  - the reverse-mode gradient pass (interior term, every data parameter enabled: 300k+ scalars, most of them
+//    vertex positions) against the primal pass at the same samples per pixel (their time ratio per sample).
 #include "core/distribution.h"
 #include "core/rng.h"
 #include "core/warp.h"
+#include "diff/interior.h"
 #include "render/render.h"
 #include "scene/scene.h"
 
@@ -84,6 +87,9 @@ Scene& scene() {
 }
 
 double g_path_rays_per_s = 0, g_raw_rays_per_s = 0; // raw: volume workload
+double g_primal_seconds_per_sample = 0, g_gradient_seconds_per_sample = 0;
+size_t g_gradient_dimension = 0;
+double g_derivative_seconds_per_sample = 0;
 
 void BM_PathPrimal(benchmark::State& state) {
     RenderOptions opt;
@@ -97,6 +103,7 @@ void BM_PathPrimal(benchmark::State& state) {
         seconds += stats.seconds;
     }
     g_path_rays_per_s = rays / seconds;
+    g_primal_seconds_per_sample = seconds / samples;
     state.counters["rays/s"] = g_path_rays_per_s;
     state.counters["samples/s"] = samples / seconds;
     state.counters["triangles"] = double(scene().triangle_count());
@@ -198,7 +205,50 @@ void BM_RawEmbree(benchmark::State& state, RayWorkload workload, double* rays_pe
 
 double g_surface_rays_per_s = 0;
 
+// Reverse mode with an adjoint of ones (the gradient of the image sum), all data parameters enabled.
+void BM_Gradient(benchmark::State& state) {
+    Parameters params(scene());
+    params.enable_all_data();
+    const Film& film = *scene().sensor->film;
+    const Image adjoint(film.width, film.height, Color3f(1.f));
+    DiffOptions o;
+    o.spp = 4;
+    o.path = path_settings(scene());
+    double seconds = 0, samples = 0;
+    for (auto _ : state) {
+        const Gradient g = render_gradient(scene(), params, adjoint, o);
+        benchmark::DoNotOptimize(g.values.data());
+        seconds += g.seconds;
+        samples += double(film.width) * film.height * o.spp;
+    }
+    g_gradient_seconds_per_sample = seconds / samples;
+    g_gradient_dimension = size_t(params.dimension());
+    state.counters["parameters"] = double(params.dimension());
+    state.counters["samples/s"] = samples / seconds;
+}
+
 BENCHMARK(BM_PathPrimal)->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
+// Forward mode along a translation of the mesh (every vertex moves).
+void BM_Derivative(benchmark::State& state) {
+    Parameters params(scene());
+    params.enable({{scene().shapes[0]->id.empty() ? "shape_0.translate" : scene().shapes[0]->id + ".translate", {0, 1, 0}}});
+    const Film& film = *scene().sensor->film;
+    DiffOptions o;
+    o.spp = 4;
+    o.path = path_settings(scene());
+    double seconds = 0, samples = 0;
+    for (auto _ : state) {
+        const DerivativeImage d = render_derivative(scene(), params, o);
+        benchmark::DoNotOptimize(d.derivative.pixels.data());
+        seconds += d.seconds;
+        samples += double(film.width) * film.height * o.spp;
+    }
+    g_derivative_seconds_per_sample = seconds / samples;
+    state.counters["samples/s"] = samples / seconds;
+}
+
+BENCHMARK(BM_Derivative)->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
+BENCHMARK(BM_Gradient)->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
 BENCHMARK_CAPTURE(BM_RawEmbree, surface_incoherent, RayWorkload::Surface, &g_surface_rays_per_s)
     ->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
 BENCHMARK_CAPTURE(BM_RawEmbree, volume_incoherent, RayWorkload::Volume, &g_raw_rays_per_s)
@@ -217,6 +267,12 @@ int main(int argc, char** argv) {
         std::printf("path integrator rays/s / raw Embree volume-origin incoherent rays/s  = %.3f\n",
                     g_path_rays_per_s / g_raw_rays_per_s);
     }
+    if (g_primal_seconds_per_sample > 0 && g_gradient_seconds_per_sample > 0)
+        std::printf("gradient pass / primal pass, time per sample = %.2f  (%zu parameter scalars)\n",
+                    g_gradient_seconds_per_sample / g_primal_seconds_per_sample, g_gradient_dimension);
+    if (g_primal_seconds_per_sample > 0 && g_derivative_seconds_per_sample > 0)
+        std::printf("forward-mode derivative pass / primal pass, time per sample = %.2f\n",
+                    g_derivative_seconds_per_sample / g_primal_seconds_per_sample);
     benchmark::Shutdown();
     return 0;
 }

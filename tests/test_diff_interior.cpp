@@ -61,6 +61,12 @@ TEST(InteriorDerivative, BlendWeight) {
                       "mix.weight", 1e-2);
 }
 
+TEST(InteriorDerivative, IorOfRoughGlass) {
+    expect_matches_fd(scene_xml(R"(<bsdf type="roughdielectric" id="glass"><float name="alpha" value="0.3"/>
+        <string name="distribution" value="ggx"/></bsdf>)"),
+                      "glass.eta", 1e-2);
+}
+
 TEST(InteriorDerivative, AreaLightRadiance) { expect_matches_fd(scene_xml(), "light.emitter.radiance", 1e-2); }
 
 TEST(InteriorDerivative, PointLightIntensity) { expect_matches_fd(scene_xml(), "bulb.intensity", 1e-2); }

@@ -16,16 +16,17 @@ template <typename T> struct FresnelDielectric {
 //   r_s = (cos_i - eta_it cos_t) / (cos_i + eta_it cos_t),  r_p = (eta_it cos_i - cos_t) / (eta_it cos_i + cos_t).
 // cos_theta_i < 0 means the incident direction is inside (the IOR ratio is inverted). Total internal
 // reflection gives F = 1 and cos_theta_t = 0; an index-matched interface gives F = 0.
-template <typename T> FresnelDielectric<T> fresnel_dielectric(const T& cos_theta_i, float eta) {
+// `eta` is a float, or T when the IOR itself is differentiated.
+template <typename T, typename E = float> FresnelDielectric<T> fresnel_dielectric(const T& cos_theta_i, const E& eta) {
     using std::abs;
     const bool outside = cos_theta_i >= T(0);
-    const float eta_it = outside ? eta : 1.f / eta, eta_ti = outside ? 1.f / eta : eta;
+    const T eta_it = outside ? T(eta) : T(1.f) / T(eta), eta_ti = outside ? T(1.f) / T(eta) : T(eta);
     // Snell's law: sin_t^2 = eta_ti^2 sin_i^2.
-    const T cos_t2 = T(1) - (T(1) - cos_theta_i * cos_theta_i) * T(eta_ti * eta_ti);
+    const T cos_t2 = T(1) - (T(1) - cos_theta_i * cos_theta_i) * (eta_ti * eta_ti);
     const T ci = abs(cos_theta_i);
     const T ct = safe_sqrt(cos_t2);
     T F;
-    if (eta == 1.f)
+    if (detach(eta) == 1.f)
         F = T(0);
     else if (ci == T(0))
         F = T(1);
@@ -34,7 +35,7 @@ template <typename T> FresnelDielectric<T> fresnel_dielectric(const T& cos_theta
         const T a_p = (T(eta_it) * ci - ct) / (T(eta_it) * ci + ct);
         F = T(0.5f) * (a_s * a_s + a_p * a_p);
     }
-    return {F, outside ? -ct : ct, T(eta_it), T(eta_ti)};
+    return {F, outside ? -ct : ct, eta_it, eta_ti};
 }
 
 // Conductor Fresnel reflectance for a complex relative IOR eta + i k (exact; Born & Wolf), with

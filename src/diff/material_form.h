@@ -49,6 +49,8 @@ public:
     SurfaceInteraction<Var> vertex(const SurfaceInteraction3f& hit) const {
         return surface_interaction<Var>(*hit.shape, hit.prim_index, hit.bary, vertices(*hit.shape));
     }
+    // A vertex of a shape at X(p, θ).
+    Vec3<Var> position(const Shape& shape, uint32_t v) const { return vertices(shape).position(v); }
     // J(p) = |(x1 - x0) × (x2 - x0)| / |(p1 - p0) × (p2 - p0)| for the triangle of `hit` (exact: X is affine on it).
     Var jacobian(const SurfaceInteraction3f& hit) const {
         const MovedVertices moved = vertices(*hit.shape);

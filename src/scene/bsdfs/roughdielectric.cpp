@@ -15,6 +15,7 @@
 //   alpha | alpha_u, alpha_v float|texture      0.1                isotropic or anisotropic roughness
 //   sample_visible           boolean            true               sample visible normals
 #include "core/fresnel.h"
+#include "core/param.h"
 #include "scene/bsdfs/bsdfs.h"
 
 namespace penumbra {
@@ -31,18 +32,20 @@ public:
         const T ci = si.wi.z, co = wo.z;
         if (ci == T(0) || co == T(0)) return Color3<T>(T(0));
         const bool reflect = ci * co > T(0);
-        const float eta = ci > T(0) ? eta_ : 1.f / eta_;
+        const T eta_int = param_value<T>(eta_, eta_index_);
+        const T eta = ci > T(0) ? eta_int : T(1.f) / eta_int;
         Vec3<T> h;
         if (!half_vector(si.wi, wo, reflect, eta, h)) return Color3<T>(T(0));
         const MicrofacetDistribution<T> distr = distribution(si);
         const T D = distr.D(h);
         if (!(D > T(0))) return Color3<T>(T(0));
         const T G = distr.G(si.wi, wo, h);
-        const T F = fresnel_dielectric(dot(si.wi, h), eta_).F;
+        const T F = fresnel_dielectric(dot(si.wi, h), eta_int).F;
         if (reflect) return reflectance_->eval(si) * (F * D * G / (T(4) * abs(ci)));
         const T wih = dot(si.wi, h), woh = dot(wo, h);
-        const float scale = ctx.mode == TransportMode::Radiance ? 1.f / (eta * eta) : 1.f;
-        const T value = abs(T(scale * eta * eta) * (T(1) - F) * D * G * wih * woh / (ci * sqr(wih + T(eta) * woh)));
+        // Radiance mode scales by 1/eta² (non-symmetric refraction), cancelling the eta² of the Jacobian.
+        const T scale_eta2 = ctx.mode == TransportMode::Radiance ? T(1.f) : eta * eta;
+        const T value = abs(scale_eta2 * (T(1) - F) * D * G * wih * woh / (ci * sqr(wih + eta * woh)));
         return transmittance_->eval(si) * value;
     }
 
@@ -52,12 +55,13 @@ public:
         const T ci = si.wi.z, co = wo.z;
         if (ci == T(0) || co == T(0)) return T(0);
         const bool reflect = ci * co > T(0);
-        const float eta = ci > T(0) ? eta_ : 1.f / eta_;
+        const T eta_int = param_value<T>(eta_, eta_index_);
+        const T eta = ci > T(0) ? eta_int : T(1.f) / eta_int;
         Vec3<T> h;
         if (!half_vector(si.wi, wo, reflect, eta, h)) return T(0);
         const T wih = dot(si.wi, h), woh = dot(wo, h);
-        const T dh_dwo = reflect ? T(1) / (T(4) * woh) : T(eta * eta) * woh / sqr(wih + T(eta) * woh);
-        const T F = fresnel_dielectric(wih, eta_).F;
+        const T dh_dwo = reflect ? T(1) / (T(4) * woh) : eta * eta * woh / sqr(wih + eta * woh);
+        const T F = fresnel_dielectric(wih, eta_int).F;
         const Vec3<T> wi_up = ci > T(0) ? si.wi : -si.wi;
         const T pm = sampling_distribution(si, ci).pdf(wi_up, h);
         return abs(pm * (reflect ? F : T(1) - F) * dh_dwo);
@@ -87,6 +91,7 @@ public:
     }
 
     void traverse(ParamVisitor& v) override {
+        v.put("eta", &eta_, 1, &eta_index_);
         traverse_roughness(v, rough_);
         v.put_object("specular_reflectance", reflectance_.get());
         v.put_object("specular_transmittance", transmittance_.get());
@@ -94,8 +99,8 @@ public:
 
 private:
     // Generalized half vector in the upper hemisphere; false if degenerate or if wi/wo see the back of it.
-    template <typename T> static bool half_vector(const Vec3<T>& wi, const Vec3<T>& wo, bool reflect, float eta, Vec3<T>& h) {
-        h = wi + wo * T(reflect ? 1.f : eta);
+    template <typename T> static bool half_vector(const Vec3<T>& wi, const Vec3<T>& wo, bool reflect, const T& eta, Vec3<T>& h) {
+        h = wi + wo * (reflect ? T(1.f) : eta);
         const T len2 = squared_norm(h);
         if (!(len2 > T(0))) return false;
         h = normalize(h);
@@ -125,6 +130,7 @@ private:
     }
     RoughnessParams rough_;
     float eta_;
+    int eta_index_ = -1;
     TexturePtr reflectance_, transmittance_;
 };
 

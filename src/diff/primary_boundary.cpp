@@ -1,0 +1,202 @@
+#include "diff/primary_boundary.h"
+
+#include "core/distribution.h"
+#include "diff/edges.h"
+#include "diff/material_form.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+namespace penumbra {
+
+namespace {
+
+struct SilhouetteEdge {
+    const Shape* shape;
+    Edge edge;
+    Vec2f s0, s1;    // projected endpoints (pixels)
+    float z0, z1;    // depths along the view direction (perspective-correct interpolation)
+};
+
+// Silhouette edges as seen from the reference camera, with their projections. Edges with an endpoint behind
+// the camera are skipped.
+struct Silhouettes {
+    std::vector<SilhouetteEdge> edges;
+    DiscreteDistribution by_length;
+    float total_length = 0.f;
+};
+
+Silhouettes find_silhouettes(const Scene& scene) {
+    const Sensor& sensor = *scene.sensor;
+    const bool parallel = sensor.plugin == "orthographic";
+    const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
+    const Vec3f forward = normalize(sensor.to_world.apply_vector(Vec3f(0.f, 0.f, 1.f)));
+    Silhouettes out;
+    std::vector<float> lengths;
+    for (const auto& shape : scene.shapes) {
+        const TriangleMesh& m = shape->mesh;
+        for (const Edge& e : discontinuity_edges(m)) {
+            if (parallel ? !is_silhouette_parallel(m, e, forward) : !is_silhouette(m, e, eye)) continue;
+            const Vec3f p0 = m.positions[e.v0], p1 = m.positions[e.v1];
+            Vec2f s0, s1;
+            float j;
+            if (!sensor.film_position(p0, forward, s0, j) || !sensor.film_position(p1, forward, s1, j)) continue;
+            const float length = std::sqrt(sqr(s1.x - s0.x) + sqr(s1.y - s0.y));
+            if (!(length > 0.f) || !std::isfinite(length)) continue;
+            out.edges.push_back({shape.get(), e, s0, s1, dot(p0 - eye, forward), dot(p1 - eye, forward)});
+            lengths.push_back(length);
+            out.total_length += length;
+        }
+    }
+    if (!lengths.empty()) out.by_length = DiscreteDistribution(lengths);
+    return out;
+}
+
+// One boundary sample: film position s, the detached factor (−L_bg / pdf), and the relative normal velocity
+// v = (s_edge(θ) − s_bg(θ)) · n as a tape expression (its value is ~0; its derivative is the velocity).
+struct BoundarySample {
+    bool valid = false;
+    Vec2f s;
+    Color3f weight;
+    Var velocity;
+};
+
+BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const MaterialForm& form, Sampler& sampler,
+                               const PathSettings& settings, RayCounter& rays) {
+    BoundarySample out;
+    const Sensor& sensor = *scene.sensor;
+    float u = sampler.next_1d();
+    const SilhouetteEdge& se = sil.edges[sil.by_length.sample(u)];
+    const float t = u;
+    out.s = se.s0 + (se.s1 - se.s0) * t;
+    // The 3D edge point projecting to s (perspective-correct along the edge; affine for a parallel projection).
+    const bool parallel = sensor.plugin == "orthographic";
+    const float tau = parallel ? t : t * se.z0 / ((1.f - t) * se.z1 + t * se.z0);
+    const Vec2f dir = se.s1 - se.s0;
+    const Vec2f n2 = Vec2f(-dir.y, dir.x) / std::sqrt(dir.x * dir.x + dir.y * dir.y);
+
+    // Which side is the occluder (a face adjacent to the edge) and which the background behind it.
+    constexpr float eps = 1e-3f; // pixels
+    const auto [ray_a, wa] = sensor.sample_ray(out.s + n2 * eps, sampler.next_2d());
+    const auto [ray_b, wb] = sensor.sample_ray(out.s - n2 * eps, sampler.next_2d());
+    rays.rays += 2;
+    const SurfaceInteraction3f hit_a = scene.intersect(ray_a), hit_b = scene.intersect(ray_b);
+    auto adjacent = [&](const SurfaceInteraction3f& h) {
+        return h.is_valid() && h.shape == se.shape && (int32_t(h.prim_index) == se.edge.f0 || int32_t(h.prim_index) == se.edge.f1);
+    };
+    const bool a_occ = adjacent(hit_a), b_occ = adjacent(hit_b);
+    if (a_occ == b_occ) return out; // hidden behind something else, or not a depth discontinuity here
+    const Ray& bg_ray = a_occ ? ray_b : ray_a;
+    const SurfaceInteraction3f& bg = a_occ ? hit_b : hit_a;
+    const Vec2f n = a_occ ? n2 * -1.f : n2; // from the occluder toward the background
+    const Vec3f p0 = se.shape->mesh.positions[se.edge.v0], p1 = se.shape->mesh.positions[se.edge.v1];
+    const Vec3f x_edge = p0 + (p1 - p0) * tau;
+    if (bg.is_valid() && bg.t < norm(x_edge - bg_ray.o) * (1.f - 1e-4f)) return out;
+
+    // L_bg: a path-traced estimate of the radiance seen just beyond the silhouette.
+    const Color3f L_bg = trace_path<float>(scene, sampler, bg_ray, bg, bg, ReferenceGeometry{}, settings, rays);
+    const float pdf = 1.f / sil.total_length;
+    out.weight = L_bg * (-1.f / pdf);
+
+    // Image-space velocities of the edge point and of the background point (first order, on the tape).
+    const Vec3<Var> x_e = form.position(*se.shape, se.edge.v0) +
+                          (form.position(*se.shape, se.edge.v1) - form.position(*se.shape, se.edge.v0)) * Var(tau);
+    const Vec3<Var> view(Vec3f(0.f, 0.f, 1.f));
+    const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
+    Vec2<Var> s_e, s_b(Var(out.s.x), Var(out.s.y));
+    Var j;
+    if (!sensor.film_position(form.to_reference_camera(x_e, eye), view, s_e, j)) return out;
+    if (bg.is_valid() && !sensor.film_position(form.to_reference_camera(form.vertex(bg).p, eye), view, s_b, j)) return out;
+    out.velocity = (s_e.x - s_b.x) * Var(n.x) + (s_e.y - s_b.y) * Var(n.y);
+    out.valid = true;
+    return out;
+}
+
+// Runs `body(sample, sampler)` for every boundary sample, in 16 fixed chunks (deterministic whatever the
+// thread count); `body` gets the chunk index.
+template <typename Body>
+void for_each_boundary_sample(const Scene& scene, const BoundaryOptions& options, const Body& body) {
+    const Film& film = *scene.sensor->film;
+    const uint64_t n = uint64_t(film.width) * film.height * uint64_t(options.samples_per_pixel);
+    constexpr int chunks = 16;
+    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency());
+    arena.execute([&] {
+        tbb::parallel_for(0, chunks, [&](int c) {
+            Sampler sampler;
+            for (uint64_t i = n * c / chunks; i < n * (c + 1) / chunks; ++i) {
+                sampler.start(options.seed ^ 0xB5AD4ECEDA1CE2A9ULL, i, 0);
+                body(c, sampler);
+            }
+        });
+    });
+}
+
+// P_j(s) for every pixel j whose filter reaches s.
+template <typename Visit> void for_each_pixel_near(const Film& film, const Vec2f& s, const Visit& visit) {
+    const ReconstructionFilter& f = *film.rfilter;
+    const float r = f.radius();
+    const int x0 = std::max(0, int(std::floor(s.x - r - 0.5f))), x1 = std::min(film.width - 1, int(s.x + r));
+    const int y0 = std::max(0, int(std::floor(s.y - r - 0.5f))), y1 = std::min(film.height - 1, int(s.y + r));
+    for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+            const float w = f.eval_normalized(Vec2f(s.x - (x + 0.5f), s.y - (y + 0.5f)));
+            if (w != 0.f) visit(x, y, w);
+        }
+}
+
+} // namespace
+
+Image primary_boundary_derivative(const Scene& scene, const Parameters& params, const BoundaryOptions& options) {
+    const Film& film = *scene.sensor->film;
+    const Silhouettes sil = find_silhouettes(scene);
+    Image result(film.width, film.height);
+    if (sil.edges.empty()) return result;
+    const MaterialForm form(params);
+    const double n = double(film.width) * film.height * options.samples_per_pixel;
+    std::vector<Image> chunks(16, Image(film.width, film.height));
+    for_each_boundary_sample(scene, options, [&](int c, Sampler& sampler) {
+        thread_local std::vector<float> tangent;
+        Tape& tape = Tape::current();
+        tape.clear();
+        RayCounter rays;
+        const BoundarySample b = sample_boundary(scene, sil, form, sampler, options.path, rays);
+        if (b.valid && b.velocity.id >= 0 && is_finite(b.weight)) {
+            tape.forward(params.direction().data(), tangent);
+            const Color3f value = b.weight * float(double(tangent[b.velocity.id]) / n);
+            for_each_pixel_near(film, b.s, [&](int x, int y, float w) { chunks[c].at(x, y) += value * w; });
+        }
+        tape.clear();
+    });
+    for (const Image& chunk : chunks)
+        for (size_t i = 0; i < result.pixels.size(); ++i) result.pixels[i] += chunk.pixels[i];
+    return result;
+}
+
+void primary_boundary_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                               const BoundaryOptions& options, std::vector<double>& gradient) {
+    const Film& film = *scene.sensor->film;
+    const Silhouettes sil = find_silhouettes(scene);
+    if (sil.edges.empty()) return;
+    const MaterialForm form(params);
+    const double n = double(film.width) * film.height * options.samples_per_pixel;
+    const size_t dim = gradient.size();
+    tbb::enumerable_thread_specific<std::vector<double>> local([dim] { return std::vector<double>(dim, 0.0); });
+    for_each_boundary_sample(scene, options, [&](int, Sampler& sampler) {
+        thread_local std::vector<float> scratch;
+        Tape& tape = Tape::current();
+        tape.clear();
+        RayCounter rays;
+        const BoundarySample b = sample_boundary(scene, sil, form, sampler, options.path, rays);
+        if (b.valid && b.velocity.id >= 0 && is_finite(b.weight)) {
+            double seed = 0;
+            for_each_pixel_near(film, b.s, [&](int x, int y, float w) { seed += w * dot(adjoint.at(x, y), b.weight); });
+            tape.backward({{b.velocity.id, float(seed / n)}}, local.local().data(), scratch);
+        }
+        tape.clear();
+    });
+    for (const auto& g : local)
+        for (size_t k = 0; k < dim; ++k) gradient[k] += g[k];
+}
+
+} // namespace penumbra

@@ -1,0 +1,27 @@
+// The primary boundary term: the last path segment x_N -> camera is a boundary segment (paper 001 §4.3,
+// Fig. 5-b). With the interior term in material form, the occluder's own material domain is fixed and only the
+// background's is cut by the silhouette; in image space the term for pixel j is
+//     ∫_silhouettes P_j(s) (−L_bg(s)) ((u_edge(s) − u_bg(s)) · n(s)) dℓ(s),
+// with u the image-space velocities of the edge point and of the background point seen next to it, n the
+// image-space normal pointing from the occluder to the background, and L_bg the radiance seen on the
+// background side. Silhouette edges are sampled uniformly by projected length.
+#pragma once
+#include "core/image.h"
+#include "diff/interior.h"
+
+namespace penumbra {
+
+struct BoundaryOptions {
+    int samples_per_pixel = 4; // boundary samples = this × the number of pixels
+    uint64_t seed = 0;
+    int threads = 0;
+    PathSettings path;
+};
+
+// Forward mode: the primary boundary term's contribution to dI/dθ.
+Image primary_boundary_derivative(const Scene& scene, const Parameters& params, const BoundaryOptions& options);
+// Reverse mode: adds Σ_pixels adjoint · (primary boundary term) to `gradient`.
+void primary_boundary_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                               const BoundaryOptions& options, std::vector<double>& gradient);
+
+} // namespace penumbra

@@ -1,0 +1,26 @@
+// The total derivative of paper 001 Eq. 19 as separate estimators with their own sample budgets: the interior
+// term (diff/interior.h) plus the boundary terms. Implemented boundary terms: primary (camera segments,
+// diff/primary_boundary.h). Each term's image is kept for validation against finite differences.
+#pragma once
+#include "diff/interior.h"
+#include "diff/primary_boundary.h"
+
+namespace penumbra {
+
+struct PsdrOptions {
+    DiffOptions interior;
+    int primary_spp = 4;      // primary boundary samples per pixel (per batch); 0 disables the term
+};
+
+struct PsdrDerivative {
+    DerivativeImage interior;  // interior term (with its primal and standard errors)
+    Image primary;             // primary boundary term
+    Image primary_stderr;      // its per-pixel standard error (empty with one batch)
+    Image total;               // interior + boundary
+    Image total_stderr;        // combined standard error (the estimators are independent)
+};
+
+PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, const PsdrOptions& options);
+Gradient psdr_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const PsdrOptions& options);
+
+} // namespace penumbra
