@@ -44,7 +44,7 @@ void add_common(CLI::App* cmd, Common& c, bool needs_params) {
 void add_method(CLI::App* cmd, Common& c) {
     cmd->add_option("--method", c.method, "interior (material-form interior term only) or psdr (interior + boundary)")
         ->check(CLI::IsMember({"interior", "psdr"}));
-    cmd->add_option("--boundary-spp", c.boundary_spp, "primary-boundary samples per pixel")->check(CLI::NonNegativeNumber);
+    cmd->add_option("--boundary-spp", c.boundary_spp, "samples per pixel of each boundary term")->check(CLI::NonNegativeNumber);
 }
 
 // The terms' budgets from the command line (the sample count is split over the batches).
@@ -56,8 +56,8 @@ PsdrOptions psdr_options(const Scene& scene, const Common& c, int batches, bool 
     o.interior.threads = c.threads;
     o.interior.antithetic = antithetic;
     o.interior.path = path_settings(scene);
-    o.primary_spp = c.method == "psdr" ? std::max(1, c.boundary_spp / batches) : 0;
-    if (c.method == "psdr" && c.boundary_spp == 0) o.primary_spp = 0;
+    o.primary_spp = c.method == "psdr" && c.boundary_spp > 0 ? std::max(1, c.boundary_spp / batches) : 0;
+    o.direct_spp = o.primary_spp;
     return o;
 }
 
@@ -122,10 +122,11 @@ void cmd_derivative(const Common& c, bool no_antithetic) {
     if (!c.terms_prefix.empty()) {
         write_signed(c.terms_prefix + "_interior" + lower_extension(c.output), d.interior.derivative);
         if (total) write_signed(c.terms_prefix + "_primary" + lower_extension(c.output), d.primary);
+        if (total) write_signed(c.terms_prefix + "_direct" + lower_extension(c.output), d.direct);
     }
     const Film& film = *scene->sensor->film;
     std::fprintf(stderr, "derivative (%s) %dx%d at %d spp%s in %.2f s, mean %.6g -> %s\n",
-                 total ? "interior + primary boundary" : "interior term", film.width, film.height,
+                 total ? "interior + primary and direct boundary" : "interior term", film.width, film.height,
                  o.interior.spp * o.interior.batches,
                  total ? (", " + std::to_string(o.primary_spp * o.interior.batches) + " boundary spp").c_str() : "",
                  seconds, image_mean(total ? d.total : d.interior.derivative), c.output.c_str());
@@ -212,7 +213,7 @@ void add_diff_commands(CLI::App& app) {
     d->add_option("--stderr", deriv->stderr_output, "per-pixel standard-error image (.exr)");
     d->add_option("--batches", deriv->batches, "independent batches for --stderr (default 8)")->check(CLI::PositiveNumber);
     d->add_flag("--no-antithetic", *no_antithetic, "disable pixel-level antithetic sampling");
-    d->add_option("--terms", deriv->terms_prefix, "also write each term's image as PREFIX_interior / PREFIX_primary");
+    d->add_option("--terms", deriv->terms_prefix, "also write each term's image as PREFIX_interior / _primary / _direct");
     add_method(d, *deriv);
     d->callback([deriv, no_antithetic] { cmd_derivative(*deriv, *no_antithetic); });
 

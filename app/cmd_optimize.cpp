@@ -24,8 +24,9 @@ std::string format_values(const std::vector<double>& v) {
 void print_summary(const OptimizeConfig& config, const OptimizeResult& result) {
     const double loss = result.history.empty() ? NAN : result.history.back().loss;
     std::fprintf(stderr, "%d iterations in %.1f s (%.2f s/iteration; target %.1f s); last loss %.4g -> %s\n",
-                 config.iterations, result.seconds, config.iterations ? result.seconds / config.iterations : 0.0,
-                 result.target_seconds, loss, config.output.c_str());
+                 config.iterations, result.seconds,
+                 config.iterations ? result.seconds / config.iterations : 0.0, result.target_seconds, loss,
+                 config.output.c_str());
     for (const ParameterResult& p : result.parameters) {
         std::fprintf(stderr, "  %-28s %s -> %s", p.name.c_str(), format_values(p.initial).c_str(),
                      format_values(p.final).c_str());
@@ -48,7 +49,8 @@ void add_optimize_command(CLI::App& app) {
         bool quiet = false;
     };
     auto opt = std::make_shared<Options>();
-    auto* cmd = app.add_subcommand("optimize", "recover scene parameters from a target image (JSON configuration)");
+    auto* cmd =
+        app.add_subcommand("optimize", "recover scene parameters from a target image (JSON configuration)");
     cmd->add_option("config", opt->config, "optimization configuration (JSON)")->required();
     cmd->add_option("--iterations", opt->iterations, "override the configuration's iterations")
         ->check(CLI::NonNegativeNumber);

@@ -22,8 +22,9 @@ Color3f srgb(int r, int g, int b) {
 
 // Tableau-10 palette (matplotlib's default cycle).
 Color3f palette(size_t i) {
-    static const int rgb[][3] = {{31, 119, 180}, {255, 127, 14}, {44, 160, 44},  {214, 39, 40},  {148, 103, 189},
-                                 {140, 86, 75},  {227, 119, 194}, {127, 127, 127}, {188, 189, 34}, {23, 190, 207}};
+    static const int rgb[][3] = {{31, 119, 180},  {255, 127, 14}, {44, 160, 44},   {214, 39, 40},
+                                 {148, 103, 189}, {140, 86, 75},  {227, 119, 194}, {127, 127, 127},
+                                 {188, 189, 34},  {23, 190, 207}};
     const int* c = rgb[i % 10];
     return srgb(c[0], c[1], c[2]);
 }
@@ -31,13 +32,14 @@ Color3f palette(size_t i) {
 // stb_easy_font takes a mutable C string of printable ASCII; anything else is drawn as '?'.
 std::vector<char> easy_font_text(const std::string& s) {
     std::vector<char> chars;
-    for (char c : s) chars.push_back(c >= 32 && c < 127 ? c : '?');
+    for (char c : s)
+        chars.push_back(c >= 32 && c < 127 ? c : '?');
     chars.push_back('\0');
     return chars;
 }
 
 class Canvas {
-public:
+  public:
     explicit Canvas(Image& image) : image_(image) {}
 
     void blend(int x, int y, const Color3f& c, float coverage) {
@@ -48,7 +50,8 @@ public:
 
     void fill_rect(int x0, int y0, int x1, int y1, const Color3f& c) {
         for (int y = std::max(y0, 0); y < std::min(y1, image_.height); ++y)
-            for (int x = std::max(x0, 0); x < std::min(x1, image_.width); ++x) image_.at(x, y) = c;
+            for (int x = std::max(x0, 0); x < std::min(x1, image_.width); ++x)
+                image_.at(x, y) = c;
     }
 
     // Anti-aliased segment of the given width: pixel coverage = clamp(w/2 + 1/2 − distance to the segment).
@@ -56,7 +59,8 @@ public:
         const double r = width * 0.5 + 1.0;
         const double dx = x1 - x0, dy = y1 - y0, len2 = dx * dx + dy * dy;
         for (int y = int(std::floor(std::min(y0, y1) - r)); y <= int(std::ceil(std::max(y0, y1) + r)); ++y)
-            for (int x = int(std::floor(std::min(x0, x1) - r)); x <= int(std::ceil(std::max(x0, x1) + r)); ++x) {
+            for (int x = int(std::floor(std::min(x0, x1) - r)); x <= int(std::ceil(std::max(x0, x1) + r));
+                 ++x) {
                 const double px = x + 0.5 - x0, py = y + 0.5 - y0;
                 const double t = len2 > 0 ? std::clamp((px * dx + py * dy) / len2, 0.0, 1.0) : 0.0;
                 const double d = std::hypot(px - t * dx, py - t * dy);
@@ -64,22 +68,26 @@ public:
             }
     }
 
-    // Text with its top-left corner at (x, y), glyphs scaled by an integer factor. Rotated text reads bottom to
-    // top with (x, y) its bottom-left corner.
+    // Text with its top-left corner at (x, y), glyphs scaled by an integer factor. Rotated text reads bottom
+    // to top with (x, y) its bottom-left corner.
     void text(int x, int y, const std::string& s, int scale, const Color3f& c, bool rotated = false) {
         std::vector<char> chars = easy_font_text(s);
         std::vector<char> buffer(chars.size() * 1200 + 1024); // ≤ ~70 quads of 4 × 16-byte vertices per glyph
-        const int quads = stb_easy_font_print(0.f, 0.f, chars.data(), nullptr, buffer.data(), int(buffer.size()));
+        const int quads =
+            stb_easy_font_print(0.f, 0.f, chars.data(), nullptr, buffer.data(), int(buffer.size()));
         for (int q = 0; q < quads; ++q) {
             const float* v0 = reinterpret_cast<const float*>(buffer.data() + size_t(q) * 64);
             const float* v2 = reinterpret_cast<const float*>(buffer.data() + size_t(q) * 64 + 32);
-            const int u0 = int(v0[0]) * scale, w0 = int(v0[1]) * scale, u1 = int(v2[0]) * scale, w1 = int(v2[1]) * scale;
-            if (rotated) fill_rect(x + w0, y - u1, x + w1, y - u0, c);
-            else fill_rect(x + u0, y + w0, x + u1, y + w1, c);
+            const int u0 = int(v0[0]) * scale, w0 = int(v0[1]) * scale, u1 = int(v2[0]) * scale,
+                      w1 = int(v2[1]) * scale;
+            if (rotated)
+                fill_rect(x + w0, y - u1, x + w1, y - u0, c);
+            else
+                fill_rect(x + u0, y + w0, x + u1, y + w1, c);
         }
     }
 
-private:
+  private:
     Image& image_;
 };
 
@@ -96,8 +104,8 @@ std::string format_tick(double v) {
 }
 
 struct Axis {
-    double lo = 0, hi = 1;       // in plotted units (log10 y for a log axis)
-    std::vector<double> ticks;   // in plotted units
+    double lo = 0, hi = 1;     // in plotted units (log10 y for a log axis)
+    std::vector<double> ticks; // in plotted units
     bool log = false;
 };
 
@@ -113,7 +121,8 @@ Axis linear_axis(double lo, double hi) {
     Axis a;
     a.lo = std::floor(lo / step + 1e-9) * step;
     a.hi = std::ceil(hi / step - 1e-9) * step;
-    for (double t = a.lo; t <= a.hi + step * 1e-6; t += step) a.ticks.push_back(t);
+    for (double t = a.lo; t <= a.hi + step * 1e-6; t += step)
+        a.ticks.push_back(t);
     return a;
 }
 
@@ -127,7 +136,8 @@ Axis log_axis(double lo, double hi) {
     for (double d = a.lo; d <= a.hi; d += 1.0) {
         a.ticks.push_back(d);
         if (minor && d < a.hi)
-            for (double m : {2.0, 5.0}) a.ticks.push_back(d + std::log10(m));
+            for (double m : {2.0, 5.0})
+                a.ticks.push_back(d + std::log10(m));
     }
     return a;
 }
@@ -137,19 +147,24 @@ Axis log_axis(double lo, double hi) {
 Image plot_lines(const std::vector<PlotSeries>& series, const PlotOptions& options) {
     const int left = 78, right = 24, top = 40, bottom = 56; // margins for labels
     if (options.width < left + right + 100 || options.height < top + bottom + 60)
-        throw Error("plot: the image (" + std::to_string(options.width) + "x" + std::to_string(options.height) +
-                    ") is too small");
-    auto drawable = [&](double x, double y) { return std::isfinite(x) && std::isfinite(y) && (!options.log_y || y > 0); };
+        throw Error("plot: the image (" + std::to_string(options.width) + "x" +
+                    std::to_string(options.height) + ") is too small");
+    auto drawable = [&](double x, double y) {
+        return std::isfinite(x) && std::isfinite(y) && (!options.log_y || y > 0);
+    };
     double xlo = INFINITY, xhi = -INFINITY, ylo = INFINITY, yhi = -INFINITY;
     for (const PlotSeries& s : series) {
-        if (s.x.size() != s.y.size()) throw Error("plot: series '" + s.name + "' has x and y of different lengths");
+        if (s.x.size() != s.y.size())
+            throw Error("plot: series '" + s.name + "' has x and y of different lengths");
         for (size_t i = 0; i < s.x.size(); ++i)
             if (drawable(s.x[i], s.y[i])) {
                 xlo = std::min(xlo, s.x[i]), xhi = std::max(xhi, s.x[i]);
                 ylo = std::min(ylo, s.y[i]), yhi = std::max(yhi, s.y[i]);
             }
     }
-    if (!(xlo <= xhi)) throw Error("plot: no series has a point to draw" + std::string(options.log_y ? " (log y needs y > 0)" : ""));
+    if (!(xlo <= xhi))
+        throw Error("plot: no series has a point to draw" +
+                    std::string(options.log_y ? " (log y needs y > 0)" : ""));
     const Axis ax = linear_axis(xlo, xhi);
     const Axis ay = options.log_y ? log_axis(ylo, yhi) : linear_axis(ylo, yhi);
 
@@ -195,15 +210,18 @@ Image plot_lines(const std::vector<PlotSeries>& series, const PlotOptions& optio
                 continue;
             }
             const double x = to_x(s.x[i]), y = to_y(s.y[i]);
-            if (has_previous) canvas.line(prev_x, prev_y, x, y, 1.6f, palette(k));
-            else canvas.line(x, y, x, y, 1.6f, palette(k));
+            if (has_previous)
+                canvas.line(prev_x, prev_y, x, y, 1.6f, palette(k));
+            else
+                canvas.line(x, y, x, y, 1.6f, palette(k));
             prev_x = x, prev_y = y, has_previous = true;
         }
     }
 
     // Title and axis labels (scale 2).
     if (!options.title.empty())
-        canvas.text((px0 + px1 - text_width(options.title, 2)) / 2, (top - 2 * GlyphHeight) / 2, options.title, 2, black);
+        canvas.text((px0 + px1 - text_width(options.title, 2)) / 2, (top - 2 * GlyphHeight) / 2,
+                    options.title, 2, black);
     if (!options.x_label.empty())
         canvas.text((px0 + px1 - text_width(options.x_label, 2)) / 2, options.height - 2 * GlyphHeight - 8,
                     options.x_label, 2, black);
@@ -212,7 +230,8 @@ Image plot_lines(const std::vector<PlotSeries>& series, const PlotOptions& optio
 
     // Legend, top right inside the frame.
     int legend_width = 0;
-    for (const PlotSeries& s : series) legend_width = std::max(legend_width, text_width(s.name, 1));
+    for (const PlotSeries& s : series)
+        legend_width = std::max(legend_width, text_width(s.name, 1));
     if (!series.empty()) {
         const int row = 14, lx1 = px1 - 8, lx0 = lx1 - legend_width - 40, ly0 = py0 + 8;
         const int ly1 = ly0 + int(series.size()) * row + 6;

@@ -9,7 +9,7 @@
 namespace penumbra {
 
 struct PlotSeries {
-    std::string name;        // legend entry
+    std::string name;         // legend entry
     std::vector<double> x, y; // same length; non-finite points (and y ≤ 0 on a log axis) break the line
 };
 

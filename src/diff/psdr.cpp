@@ -5,48 +5,68 @@
 
 namespace penumbra {
 
-PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, const PsdrOptions& options) {
-    PsdrDerivative out;
-    out.interior = render_derivative(scene, params, options.interior);
+namespace {
+
+// Mean and standard error over batches of a boundary estimator (run with independent seeds).
+template <typename Estimator>
+void boundary_batches(const Scene& scene, const PsdrOptions& options, int spp, uint64_t salt, const Estimator& estimate,
+                      Image& mean, Image& stderr_img) {
     const Film& film = *scene.sensor->film;
     const int B = options.interior.batches;
-    out.primary = Image(film.width, film.height);
+    mean = Image(film.width, film.height);
+    if (B > 1) stderr_img = Image(film.width, film.height);
+    if (spp <= 0) return;
     std::vector<Image> batches;
-    if (options.primary_spp > 0) {
-        for (int b = 0; b < B; ++b) {
-            BoundaryOptions bo;
-            bo.samples_per_pixel = options.primary_spp;
-            bo.seed = options.interior.seed + 0x2545F4914F6CDD1DULL * uint64_t(b + 1);
-            bo.threads = options.interior.threads;
-            bo.path = options.interior.path;
-            batches.push_back(primary_boundary_derivative(scene, params, bo));
-        }
+    for (int b = 0; b < B; ++b) {
+        BoundaryOptions bo;
+        bo.samples_per_pixel = spp;
+        bo.seed = options.interior.seed + salt * uint64_t(b + 1);
+        bo.threads = options.interior.threads;
+        bo.path = options.interior.path;
+        batches.push_back(estimate(bo));
     }
-    if (B > 1) out.primary_stderr = Image(film.width, film.height);
-    for (size_t i = 0; i < out.primary.pixels.size() && !batches.empty(); ++i) {
+    for (size_t i = 0; i < mean.pixels.size(); ++i) {
         Vec3d sum(0.0), sum2(0.0);
         for (const Image& im : batches) {
             const Vec3d v(im.pixels[i]);
             sum += v;
             sum2 += v * v;
         }
-        const Vec3d mean = sum / double(B);
-        out.primary.pixels[i] = Color3f(mean);
+        const Vec3d m = sum / double(B);
+        mean.pixels[i] = Color3f(m);
         if (B > 1) {
-            const Vec3d var = (sum2 / double(B) - mean * mean) * (double(B) / (B - 1));
-            out.primary_stderr.pixels[i] = Color3f(float(std::sqrt(std::max(0.0, var.x) / B)),
-                                                   float(std::sqrt(std::max(0.0, var.y) / B)),
-                                                   float(std::sqrt(std::max(0.0, var.z) / B)));
+            const Vec3d var = (sum2 / double(B) - m * m) * (double(B) / (B - 1));
+            stderr_img.pixels[i] = Color3f(float(std::sqrt(std::max(0.0, var.x) / B)),
+                                           float(std::sqrt(std::max(0.0, var.y) / B)),
+                                           float(std::sqrt(std::max(0.0, var.z) / B)));
         }
     }
-    out.total = out.interior.derivative;
-    for (size_t i = 0; i < out.total.pixels.size(); ++i) out.total.pixels[i] += out.primary.pixels[i];
-    if (B > 1) {
-        out.total_stderr = Image(film.width, film.height);
-        for (size_t i = 0; i < out.total.pixels.size(); ++i) {
-            const Color3f a = out.interior.stderr_img.pixels[i];
-            const Color3f b = out.primary_stderr.pixels.empty() ? Color3f(0.f) : out.primary_stderr.pixels[i];
-            out.total_stderr.pixels[i] = Color3f(std::hypot(a.x, b.x), std::hypot(a.y, b.y), std::hypot(a.z, b.z));
+}
+
+constexpr uint64_t PrimarySalt = 0x2545F4914F6CDD1DULL, DirectSalt = 0x9FB21C651E98DF25ULL;
+
+} // namespace
+
+PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, const PsdrOptions& options) {
+    PsdrDerivative out;
+    out.interior = render_derivative(scene, params, options.interior);
+    boundary_batches(scene, options, options.primary_spp, PrimarySalt,
+                     [&](const BoundaryOptions& bo) { return primary_boundary_derivative(scene, params, bo); },
+                     out.primary, out.primary_stderr);
+    boundary_batches(scene, options, options.direct_spp, DirectSalt,
+                     [&](const BoundaryOptions& bo) { return direct_boundary_derivative(scene, params, bo); },
+                     out.direct, out.direct_stderr);
+    const Film& film = *scene.sensor->film;
+    out.total = Image(film.width, film.height);
+    const bool have_se = options.interior.batches > 1;
+    if (have_se) out.total_stderr = Image(film.width, film.height);
+    for (size_t i = 0; i < out.total.pixels.size(); ++i) {
+        out.total.pixels[i] = out.interior.derivative.pixels[i] + out.primary.pixels[i] + out.direct.pixels[i];
+        if (have_se) {
+            // The three estimators use independent samples: variances add.
+            const Vec3d a(out.interior.stderr_img.pixels[i]), b(out.primary_stderr.pixels[i]), c(out.direct_stderr.pixels[i]);
+            const Vec3d v = a * a + b * b + c * c;
+            out.total_stderr.pixels[i] = Color3f(float(std::sqrt(v.x)), float(std::sqrt(v.y)), float(std::sqrt(v.z)));
         }
     }
     return out;
@@ -55,13 +75,18 @@ PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, con
 Gradient psdr_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const PsdrOptions& options) {
     const auto start = std::chrono::steady_clock::now();
     Gradient g = render_gradient(scene, params, adjoint, options.interior);
+    BoundaryOptions bo;
+    bo.threads = options.interior.threads;
+    bo.path = options.interior.path;
     if (options.primary_spp > 0) {
-        BoundaryOptions bo;
         bo.samples_per_pixel = options.primary_spp;
-        bo.seed = options.interior.seed + 0x2545F4914F6CDD1DULL;
-        bo.threads = options.interior.threads;
-        bo.path = options.interior.path;
+        bo.seed = options.interior.seed + PrimarySalt;
         primary_boundary_gradient(scene, params, adjoint, bo, g.values);
+    }
+    if (options.direct_spp > 0) {
+        bo.samples_per_pixel = options.direct_spp;
+        bo.seed = options.interior.seed + DirectSalt;
+        direct_boundary_gradient(scene, params, adjoint, bo, g.values);
     }
     g.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return g;

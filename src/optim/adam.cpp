@@ -8,14 +8,17 @@
 namespace penumbra {
 
 Adam::Adam(std::vector<AdamGroup> groups, int dimension, AdamSettings settings)
-    : groups_(std::move(groups)), settings_(settings), m_(size_t(dimension), 0.0), v_(size_t(dimension), 0.0) {
+    : groups_(std::move(groups)), settings_(settings), m_(size_t(dimension), 0.0),
+      v_(size_t(dimension), 0.0) {
     std::vector<int> covered(size_t(dimension), 0);
     for (const AdamGroup& g : groups_) {
         if (g.offset < 0 || g.size <= 0 || g.offset + g.size > dimension)
             throw Error("adam: group '" + g.name + "' lies outside the parameter vector");
-        if (!(g.learning_rate > 0.0)) throw Error("adam: group '" + g.name + "' needs a positive learning rate");
+        if (!(g.learning_rate > 0.0))
+            throw Error("adam: group '" + g.name + "' needs a positive learning rate");
         if (!(g.lower <= g.upper)) throw Error("adam: group '" + g.name + "' has lower bound > upper bound");
-        for (int k = 0; k < g.size; ++k) covered[size_t(g.offset + k)]++;
+        for (int k = 0; k < g.size; ++k)
+            covered[size_t(g.offset + k)]++;
     }
     for (int c : covered)
         if (c != 1) throw Error("adam: the groups must cover every parameter exactly once");
@@ -43,7 +46,8 @@ void Adam::step(std::vector<double>& x, const std::vector<double>& gradient, dou
 
 void Adam::project(std::vector<double>& x) const {
     for (const AdamGroup& g : groups_)
-        for (int k = g.offset; k < g.offset + g.size; ++k) x[size_t(k)] = std::clamp(x[size_t(k)], g.lower, g.upper);
+        for (int k = g.offset; k < g.offset + g.size; ++k)
+            x[size_t(k)] = std::clamp(x[size_t(k)], g.lower, g.upper);
 }
 
 } // namespace penumbra

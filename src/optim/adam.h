@@ -20,8 +20,9 @@ struct AdamSettings {
 };
 
 class Adam {
-public:
-    // Throws Error if the groups do not tile [0, dimension) or a group has lower > upper or a non-positive rate.
+  public:
+    // Throws Error if the groups do not tile [0, dimension) or a group has lower > upper or a non-positive
+    // rate.
     Adam(std::vector<AdamGroup> groups, int dimension, AdamSettings settings = {});
 
     // One step with gradient g (t = number of steps so far + 1):
@@ -35,7 +36,7 @@ public:
     int steps() const { return t_; }
     const std::vector<AdamGroup>& groups() const { return groups_; }
 
-private:
+  private:
     std::vector<AdamGroup> groups_;
     AdamSettings settings_;
     std::vector<double> m_, v_;

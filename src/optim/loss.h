@@ -1,5 +1,5 @@
-// Image losses for inverse rendering. Each returns the loss value and its adjoint image ∂L/∂I, the seed of the
-// reverse-mode gradient dL/dθ = Σ_pixels ∂L/∂I · dI/dθ (diff/interior.h).
+// Image losses for inverse rendering. Each returns the loss value and its adjoint image ∂L/∂I, the seed of
+// the reverse-mode gradient dL/dθ = Σ_pixels ∂L/∂I · dI/dθ (diff/interior.h).
 #pragma once
 #include "core/image.h"
 

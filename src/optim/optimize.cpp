@@ -29,8 +29,9 @@ std::string type_name(const json& j) { return j.is_number() ? "number" : j.type_
 
 // Reads the keys of one JSON object; every key must be read, so that a typo is an error, not a default.
 class ConfigObject {
-public:
-    ConfigObject(const json& j, std::string where, const std::string& source) : j_(j), where_(std::move(where)), source_(source) {
+  public:
+    ConfigObject(const json& j, std::string where, const std::string& source)
+        : j_(j), where_(std::move(where)), source_(source) {
         if (!j.is_object()) fail(where_.empty() ? "the configuration" : "'" + where_ + "'", "an object", j);
     }
 
@@ -56,7 +57,8 @@ public:
         if (!v) return fallback;
         if (!v->is_number_integer()) fail(key, "an integer", *v);
         const int64_t i = v->get<int64_t>();
-        if (i < min) throw Error(source_ + ": key '" + path(key) + "' must be at least " + std::to_string(min));
+        if (i < min)
+            throw Error(source_ + ": key '" + path(key) + "' must be at least " + std::to_string(min));
         return i;
     }
     std::string string(const std::string& key, const std::string& fallback, bool required = false) {
@@ -83,7 +85,8 @@ public:
         for (auto it = j_.begin(); it != j_.end(); ++it)
             if (!known_.count(it.key())) {
                 std::string expected;
-                for (const std::string& k : known_) expected += (expected.empty() ? "" : ", ") + k;
+                for (const std::string& k : known_)
+                    expected += (expected.empty() ? "" : ", ") + k;
                 throw Error(source_ + ": unknown key '" + path(it.key()) + "' (expected: " + expected + ")");
             }
     }
@@ -93,7 +96,7 @@ public:
         throw Error(source_ + ": key '" + path(key) + "': expected " + expected + ", got " + type_name(got));
     }
 
-private:
+  private:
     const json& j_;
     std::string where_;
     const std::string& source_;
@@ -135,9 +138,12 @@ OptimizeConfig parse_optimize_config(const json& j, const std::string& base_dir,
     if (const json* d = root.find("defines", false)) {
         if (!d->is_object()) root.fail("defines", "an object", *d);
         for (auto it = d->begin(); it != d->end(); ++it) {
-            if (it->is_string()) c.defines[it.key()] = it->get<std::string>();
-            else if (it->is_number()) c.defines[it.key()] = it->dump();
-            else root.fail("defines." + it.key(), "a string or a number", *it);
+            if (it->is_string())
+                c.defines[it.key()] = it->get<std::string>();
+            else if (it->is_number())
+                c.defines[it.key()] = it->dump();
+            else
+                root.fail("defines." + it.key(), "a string or a number", *it);
         }
     }
     const json* params = root.find("parameters", true);
@@ -201,7 +207,8 @@ uint64_t stream_seed(uint64_t seed, uint64_t stream) {
 std::vector<double> expand(const std::string& name, const std::vector<float>& v, int size) {
     if (int(v.size()) == size) return {v.begin(), v.end()};
     if (v.size() == 1) return std::vector<double>(size_t(size), double(v[0]));
-    throw Error("parameter '" + name + "' has " + std::to_string(size) + " values; got " + std::to_string(v.size()));
+    throw Error("parameter '" + name + "' has " + std::to_string(size) + " values; got " +
+                std::to_string(v.size()));
 }
 
 std::vector<float> to_float(const std::vector<double>& v) { return {v.begin(), v.end()}; }
@@ -226,12 +233,13 @@ std::string snapshot_name(int iteration) {
 
 // CSV columns: iteration, loss, parameter_error, seconds, then every optimized scalar.
 class CsvLog {
-public:
+  public:
     CsvLog(const fs::path& path, const Parameters& params) : out_(path) {
         if (!out_) throw Error("cannot write '" + path.string() + "'");
         out_ << "iteration,loss,parameter_error,seconds";
         for (const auto& [p, offset] : params.enabled())
-            for (int k = 0; k < p->size; ++k) out_ << "," << p->name << (p->size > 1 ? "[" + std::to_string(k) + "]" : "");
+            for (int k = 0; k < p->size; ++k)
+                out_ << "," << p->name << (p->size > 1 ? "[" + std::to_string(k) + "]" : "");
         out_ << "\n";
     }
     void write(const IterationRecord& r, const std::vector<double>& x) {
@@ -248,13 +256,14 @@ public:
         out_ << "\n" << std::flush;
     }
 
-private:
+  private:
     std::ofstream out_;
 };
 
 void write_result_json(const fs::path& path, const OptimizeResult& result) {
     json j;
-    j["final_parameter_error"] = std::isfinite(result.final_parameter_error) ? json(result.final_parameter_error) : json();
+    j["final_parameter_error"] =
+        std::isfinite(result.final_parameter_error) ? json(result.final_parameter_error) : json();
     j["seconds"] = result.seconds;
     for (const ParameterResult& p : result.parameters) {
         json e{{"initial", p.initial}, {"final", p.final}};
@@ -266,23 +275,43 @@ void write_result_json(const fs::path& path, const OptimizeResult& result) {
     if (!out) throw Error("cannot write '" + path.string() + "'");
 }
 
+// loss.png, and parameter_error.png when the true values are known (log-scale y).
+void write_curves(const fs::path& out, const OptimizeConfig& config, const OptimizeResult& result) {
+    if (result.history.empty()) return;
+    PlotSeries loss{"loss (" + loss_kind_name(config.loss) + ")", {}, {}}, error{"parameter error", {}, {}};
+    for (const IterationRecord& r : result.history) {
+        loss.x.push_back(r.iteration), loss.y.push_back(r.loss);
+        error.x.push_back(r.iteration), error.y.push_back(r.parameter_error);
+    }
+    write_plot((out / "loss.png").string(), {loss},
+               {"Inverse rendering: loss", "iteration", "loss", true, 720, 440});
+    if (std::isfinite(result.final_parameter_error))
+        write_plot((out / "parameter_error.png").string(), {error},
+                   {"Inverse rendering: parameter error", "iteration", "|theta - theta*| / |theta*|", true,
+                    720, 440});
+}
+
 } // namespace
 
 double relative_distance(const std::vector<double>& a, const std::vector<double>& b) {
     double d2 = 0, b2 = 0;
-    for (size_t k = 0; k < a.size(); ++k) d2 += (a[k] - b[k]) * (a[k] - b[k]), b2 += b[k] * b[k];
+    for (size_t k = 0; k < a.size(); ++k)
+        d2 += (a[k] - b[k]) * (a[k] - b[k]), b2 += b[k] * b[k];
     return b2 > 0 ? std::sqrt(d2 / b2) : std::sqrt(d2);
 }
 
-OptimizeResult optimize(const OptimizeConfig& config, const std::function<void(const IterationRecord&)>& on_iteration) {
+OptimizeResult optimize(const OptimizeConfig& config,
+                        const std::function<void(const IterationRecord&)>& on_iteration) {
     auto scene = load_scene(config.scene, config.defines);
     Parameters params(*scene);
     std::vector<std::pair<std::string, std::vector<float>>> selection;
-    for (const OptimizedParameter& p : config.parameters) selection.emplace_back(p.name, std::vector<float>{});
+    for (const OptimizedParameter& p : config.parameters)
+        selection.emplace_back(p.name, std::vector<float>{});
     params.enable(selection);
     for (const auto& [p, offset] : params.enabled())
         if (p->kind != Parameter::Kind::Data)
-            throw Error("parameter '" + p->name + "' is a motion; optimize only material/emitter data for now");
+            throw Error("parameter '" + p->name +
+                        "' is a motion; optimize only material/emitter data for now");
 
     // Adam groups, truth and initial values, in the enabled order.
     std::vector<AdamGroup> groups;
@@ -296,7 +325,8 @@ OptimizeResult optimize(const OptimizeConfig& config, const std::function<void(c
             const std::vector<double> v = expand(op.name, it->second, p->size);
             std::copy(v.begin(), v.end(), truth.begin() + offset);
         }
-        const std::vector<double> init = op.init.empty() ? slice(truth, offset, p->size) : expand(op.name, op.init, p->size);
+        const std::vector<double> init =
+            op.init.empty() ? slice(truth, offset, p->size) : expand(op.name, op.init, p->size);
         std::copy(init.begin(), init.end(), x.begin() + offset);
     }
     Adam adam(groups, params.dimension());
@@ -319,7 +349,8 @@ OptimizeResult optimize(const OptimizeConfig& config, const std::function<void(c
     } else {
         target = read_image(config.target_image);
     }
-    result.target_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - target_start).count();
+    result.target_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - target_start).count();
     params.set_values(*scene, to_float(x));
 
     DiffOptions diff;
@@ -328,12 +359,16 @@ OptimizeResult optimize(const OptimizeConfig& config, const std::function<void(c
     diff.path = path_settings(*scene);
     CsvLog log(out / "log.csv", params);
     const auto start = std::chrono::steady_clock::now();
-    auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+    auto elapsed = [&] {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
 
     for (int it = 0; it < config.iterations; ++it) {
-        // The primal (stream 2i+1) gives the loss and the adjoint ∂L/∂I; the gradient uses independent samples
-        // (stream 2i+2): for a nonlinear loss, E[∂L/∂I(Î)] · E[dÎ/dθ] is unbiased only if the two are independent.
-        const Image primal = render_image(*scene, config.spp, stream_seed(config.seed, 2 * uint64_t(it) + 1), config.threads);
+        // The primal (stream 2i+1) gives the loss and the adjoint ∂L/∂I; the gradient uses independent
+        // samples (stream 2i+2): for a nonlinear loss, E[∂L/∂I(Î)] · E[dÎ/dθ] is unbiased only if the two are
+        // independent.
+        const Image primal =
+            render_image(*scene, config.spp, stream_seed(config.seed, 2 * uint64_t(it) + 1), config.threads);
         const LossResult loss = compute_loss(config.loss, primal, target);
         IterationRecord record{it, loss.value, known_truth ? relative_distance(x, truth) : NAN, 0.0};
         if (config.snapshot_every > 0 && it % config.snapshot_every == 0)
@@ -342,7 +377,8 @@ OptimizeResult optimize(const OptimizeConfig& config, const std::function<void(c
         diff.seed = stream_seed(config.seed, 2 * uint64_t(it) + 2);
         const Gradient gradient = render_gradient(*scene, params, loss.adjoint, diff);
         // Exponential schedule: the rates fall to lr_decay × lr at the last iteration.
-        const double lr_scale = config.iterations > 1 ? std::pow(config.lr_decay, double(it) / (config.iterations - 1)) : 1.0;
+        const double lr_scale =
+            config.iterations > 1 ? std::pow(config.lr_decay, double(it) / (config.iterations - 1)) : 1.0;
         const std::vector<double> x_before = x;
         adam.step(x, gradient.values, lr_scale);
         params.set_values(*scene, to_float(x));
@@ -355,7 +391,8 @@ OptimizeResult optimize(const OptimizeConfig& config, const std::function<void(c
     result.seconds = elapsed();
 
     write_image((out / "final.png").string(),
-                render_image(*scene, config.spp, stream_seed(config.seed, 2 * uint64_t(config.iterations) + 1), config.threads));
+                render_image(*scene, config.spp,
+                             stream_seed(config.seed, 2 * uint64_t(config.iterations) + 1), config.threads));
     for (size_t i = 0; i < config.parameters.size(); ++i) {
         const auto [p, offset] = params.enabled()[i];
         ParameterResult pr{p->name, slice(x_initial, offset, p->size), slice(x, offset, p->size), {}, NAN};
@@ -368,10 +405,7 @@ OptimizeResult optimize(const OptimizeConfig& config, const std::function<void(c
     if (known_truth) result.final_parameter_error = relative_distance(x, truth);
     write_result_json(out / "result.json", result);
 
-    PlotSeries curve{"loss (" + loss_kind_name(config.loss) + ")", {}, {}};
-    for (const IterationRecord& r : result.history) curve.x.push_back(r.iteration), curve.y.push_back(r.loss);
-    if (!result.history.empty())
-        write_plot((out / "loss.png").string(), {curve}, {"Inverse rendering: loss", "iteration", "loss", true, 720, 440});
+    write_curves(out, config, result);
     return result;
 }
 

@@ -1,13 +1,16 @@
-// First inverse rendering: recover material and emitter parameters from a target image by Adam on the gradient
-// of an image loss (interior term, diff/interior.h). Driven by a JSON configuration (docs/optimize.md):
+// First inverse rendering: recover material and emitter parameters from a target image by Adam on the
+// gradient of an image loss (interior term, diff/interior.h). Driven by a JSON configuration
+// (docs/optimize.md):
 //
 //   scene           string     scene file, relative to the configuration file
 //   defines         object     <default> overrides, name → string or number
-//   parameters      object     name → {"init": number | [values], "lr": number, "bounds": [lo | null, hi | null]}
+//   parameters      object     name → {"init": number | [values], "lr": number, "bounds": [lo | null, hi |
+//   null]}
 //                              ("init" defaults to the scene's value, "bounds" to none)
 //   target          object     {"image": path relative to the configuration}  or
 //                              {"values": {name → number | [values]}, "spp": int}: the same scene with these
-//                              values of optimized parameters (the others keep the scene's), rendered at start
+//                              values of optimized parameters (the others keep the scene's), rendered at
+//                              start
 //   loss            string     "l2" (default) | "rel_l2"
 //   iterations      int        number of Adam steps
 //   spp             int        samples per pixel of the primal image of each iteration
@@ -41,10 +44,10 @@ struct OptimizedParameter {
 };
 
 struct OptimizeConfig {
-    std::string scene;                            // resolved path
+    std::string scene; // resolved path
     std::map<std::string, std::string> defines;
     std::vector<OptimizedParameter> parameters;
-    std::string target_image;                     // resolved path, or empty for a rendered target
+    std::string target_image; // resolved path, or empty for a rendered target
     std::map<std::string, std::vector<float>> target_values;
     int target_spp = 1024;
     LossKind loss = LossKind::L2;
@@ -66,13 +69,14 @@ OptimizeConfig load_optimize_config(const std::string& path);
 struct IterationRecord {
     int iteration = 0;
     double loss = 0;
-    double parameter_error = std::numeric_limits<double>::quiet_NaN(); // ‖θ − θ*‖ / ‖θ*‖, NaN when θ* is unknown
-    double seconds = 0;                                                 // since the loop started
+    double parameter_error =
+        std::numeric_limits<double>::quiet_NaN(); // ‖θ − θ*‖ / ‖θ*‖, NaN when θ* is unknown
+    double seconds = 0;                           // since the loop started
 };
 
 struct ParameterResult {
     std::string name;
-    std::vector<double> initial, final, truth; // truth empty when unknown
+    std::vector<double> initial, final, truth;                        // truth empty when unknown
     double relative_error = std::numeric_limits<double>::quiet_NaN(); // ‖final − truth‖ / ‖truth‖
 };
 

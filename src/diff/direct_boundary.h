@@ -1,0 +1,18 @@
+// The direct boundary term: next-event segments x_D -> y (toward a point on an emitter) that graze an edge
+// (paper 001 §4.2–4.3; for point lights the segment x_src x_0 is the boundary segment). In the receiver's
+// material frame the lit region is cut by the shadow curve; for pixel j the term is
+//     ∫_lights ∫_shadow curve  W_j(x_D) f_s(camera ← x_D → y) G'(x_D, y) L_e(y) (v(x_D) · n_shadow) dℓ(x_D) dA(y)
+// with W_j the camera importance (filter at the projection times |ds/dA|), v the velocity of the shadow
+// curve relative to the receiver's material motion and n_shadow its normal pointing into the shadow. It is
+// sampled from edge points x_B (uniform by length) and emitter samples y, extending y -> x_B to the receiver,
+// with dℓ(x_D) = |dx_D/dx_B| dℓ(x_B) along the edge.
+#pragma once
+#include "diff/primary_boundary.h"
+
+namespace penumbra {
+
+Image direct_boundary_derivative(const Scene& scene, const Parameters& params, const BoundaryOptions& options);
+void direct_boundary_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                              const BoundaryOptions& options, std::vector<double>& gradient);
+
+} // namespace penumbra
