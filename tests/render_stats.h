@@ -1,6 +1,7 @@
 // Monte Carlo statistics over independent renders (different seeds): per-pixel means and standard errors,
 // and the standard error of the image mean. Every render-based tolerance in the tests derives from these.
 #pragma once
+#include "core/batch_stats.h"
 #include "render/render.h"
 
 #include <cmath>
@@ -22,27 +23,14 @@ inline BatchStats render_batches(const Scene& scene, int batches, int spp, uint6
         opt.seed = seed0 + uint64_t(b) * 7919;
         images.push_back(render(scene, opt));
     }
-    const int w = images[0].width, h = images[0].height;
-    BatchStats s{Image(w, h), Image(w, h)};
+    ImageBatches pixel_stats;
+    for (const Image& im : images) pixel_stats.add(im);
+    BatchStats s{pixel_stats.mean(), pixel_stats.standard_error()};
     std::vector<double> means;
     for (const Image& im : images) {
         double m = 0;
         for (const auto& p : im.pixels) m += p.x + p.y + p.z;
         means.push_back(m / (3.0 * im.pixels.size()));
-    }
-    for (size_t i = 0; i < s.mean.pixels.size(); ++i) {
-        Vec3d sum(0.0), sum2(0.0);
-        for (const Image& im : images) {
-            const Vec3d v(im.pixels[i]);
-            sum += v;
-            sum2 += v * v;
-        }
-        const Vec3d mean = sum / double(batches);
-        const Vec3d var = (sum2 / double(batches) - mean * mean) * (double(batches) / (batches - 1));
-        s.mean.pixels[i] = Color3f(mean);
-        s.stderr_img.pixels[i] = Color3f(float(std::sqrt(std::max(0.0, var.x) / batches)),
-                                         float(std::sqrt(std::max(0.0, var.y) / batches)),
-                                         float(std::sqrt(std::max(0.0, var.z) / batches)));
     }
     double m = 0, m2 = 0;
     for (double v : means) {

@@ -5,9 +5,6 @@
 #include "diff/material_form.h"
 #include "scene/shape_interaction.h"
 
-#include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 namespace penumbra {
 
@@ -66,16 +63,11 @@ template <typename V> V line_plane(const V& from, const V& through, const V& p0,
     return from + d * (dot(n, p0 - from) / dot(n, d));
 }
 
-struct DirectSample {
-    bool valid = false;
-    Vec2f s;         // film position of the receiver point
-    Color3f weight;  // W-less lit integrand × |ds/dA| × dℓ_D/dℓ_B / pdf
-    Var velocity;    // (x_D(θ) − x_receiver(θ)) · n_shadow: its derivative is the curve's normal velocity
-};
-
-DirectSample sample_direct(const Scene& scene, const EdgeSet& edges, const MaterialForm& form, Sampler& sampler,
+// One sample: s = the receiver point's film position, weight = the lit integrand × |ds/dA| × dℓ_D/dℓ_B / pdf,
+// velocity = (x_D(θ) − x_receiver(θ)) · n_shadow (its derivative is the shadow curve's normal velocity).
+BoundarySample sample_direct(const Scene& scene, const EdgeSet& edges, const MaterialForm& form, Sampler& sampler,
                            RayCounter& rays) {
-    DirectSample out;
+    BoundarySample out;
     const Sensor& sensor = *scene.sensor;
     float u = sampler.next_1d();
     const SceneEdge& se = edges.edges[edges.by_length.sample(u)];
@@ -171,86 +163,27 @@ DirectSample sample_direct(const Scene& scene, const EdgeSet& edges, const Mater
     return out;
 }
 
-template <typename Body> void for_each_sample(const Scene& scene, const BoundaryOptions& options, const Body& body) {
-    const Film& film = *scene.sensor->film;
-    const uint64_t n = uint64_t(film.width) * film.height * uint64_t(options.samples_per_pixel);
-    constexpr int chunks = 16;
-    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency());
-    arena.execute([&] {
-        tbb::parallel_for(0, chunks, [&](int c) {
-            Sampler sampler;
-            for (uint64_t i = n * c / chunks; i < n * (c + 1) / chunks; ++i) {
-                sampler.start(options.seed ^ 0x94D049BB133111EBULL, i, 0);
-                body(c, sampler);
-            }
-        });
-    });
-}
-
-template <typename Visit> void for_each_pixel_near(const Film& film, const Vec2f& s, const Visit& visit) {
-    const ReconstructionFilter& f = *film.rfilter;
-    const float r = f.radius();
-    const int x0 = std::max(0, int(std::floor(s.x - r - 0.5f))), x1 = std::min(film.width - 1, int(s.x + r));
-    const int y0 = std::max(0, int(std::floor(s.y - r - 0.5f))), y1 = std::min(film.height - 1, int(s.y + r));
-    for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
-            const float w = f.eval_normalized(Vec2f(s.x - (x + 0.5f), s.y - (y + 0.5f)));
-            if (w != 0.f) visit(x, y, w);
-        }
-}
+constexpr uint64_t Salt = 0x94D049BB133111EBULL;
 
 } // namespace
 
 Image direct_boundary_derivative(const Scene& scene, const Parameters& params, const BoundaryOptions& options) {
-    const Film& film = *scene.sensor->film;
-    Image result(film.width, film.height);
     const EdgeSet edges = all_edges(scene);
-    if (edges.edges.empty() || scene.emitters.empty()) return result;
+    if (edges.edges.empty() || scene.emitters.empty()) return Image(scene.sensor->film->width, scene.sensor->film->height);
     const MaterialForm form(params);
-    const double n = double(film.width) * film.height * options.samples_per_pixel;
-    std::vector<Image> chunks(16, Image(film.width, film.height));
-    for_each_sample(scene, options, [&](int c, Sampler& sampler) {
-        thread_local std::vector<float> tangent;
-        Tape& tape = Tape::current();
-        tape.clear();
-        RayCounter rays;
-        const DirectSample d = sample_direct(scene, edges, form, sampler, rays);
-        if (d.valid && d.velocity.id >= 0 && is_finite(d.weight)) {
-            tape.forward(params.direction().data(), tangent);
-            const Color3f value = d.weight * float(double(tangent[d.velocity.id]) / n);
-            for_each_pixel_near(film, d.s, [&](int x, int y, float w) { chunks[c].at(x, y) += value * w; });
-        }
-        tape.clear();
+    return boundary_derivative(scene, params, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
+        return sample_direct(scene, edges, form, sampler, rays);
     });
-    for (const Image& chunk : chunks)
-        for (size_t i = 0; i < result.pixels.size(); ++i) result.pixels[i] += chunk.pixels[i];
-    return result;
 }
 
 void direct_boundary_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                               const BoundaryOptions& options, std::vector<double>& gradient) {
-    const Film& film = *scene.sensor->film;
     const EdgeSet edges = all_edges(scene);
     if (edges.edges.empty() || scene.emitters.empty()) return;
     const MaterialForm form(params);
-    const double n = double(film.width) * film.height * options.samples_per_pixel;
-    const size_t dim = gradient.size();
-    tbb::enumerable_thread_specific<std::vector<double>> local([dim] { return std::vector<double>(dim, 0.0); });
-    for_each_sample(scene, options, [&](int, Sampler& sampler) {
-        thread_local std::vector<float> scratch;
-        Tape& tape = Tape::current();
-        tape.clear();
-        RayCounter rays;
-        const DirectSample d = sample_direct(scene, edges, form, sampler, rays);
-        if (d.valid && d.velocity.id >= 0 && is_finite(d.weight)) {
-            double seed = 0;
-            for_each_pixel_near(film, d.s, [&](int x, int y, float w) { seed += w * dot(adjoint.at(x, y), d.weight); });
-            tape.backward({{d.velocity.id, float(seed / n)}}, local.local().data(), scratch);
-        }
-        tape.clear();
-    });
-    for (const auto& g : local)
-        for (size_t k = 0; k < dim; ++k) gradient[k] += g[k];
+    boundary_gradient(scene, adjoint, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
+        return sample_direct(scene, edges, form, sampler, rays);
+    }, gradient);
 }
 
 } // namespace penumbra

@@ -1,5 +1,7 @@
 #include "diff/finite_difference.h"
 
+#include "core/batch_stats.h"
+
 #include <chrono>
 #include <cmath>
 
@@ -11,7 +13,7 @@ FiniteDifference finite_difference(Scene& scene, Parameters& params, double h, c
     if (!(h > 0.0) || !std::isfinite(h)) throw Error("finite differences: the step must be positive and finite");
     if (batches <= 0) throw Error("finite differences: batches must be positive");
     const auto start = std::chrono::steady_clock::now();
-    std::vector<Image> estimates;
+    ImageBatches estimates;
     for (int b = 0; b < batches; ++b) {
         RenderOptions o = options;
         o.seed = options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b);
@@ -23,28 +25,11 @@ FiniteDifference finite_difference(Scene& scene, Parameters& params, double h, c
         const Image minus = render(scene, o);
         Image d(plus.width, plus.height);
         for (size_t i = 0; i < d.pixels.size(); ++i) d.pixels[i] = (plus.pixels[i] - minus.pixels[i]) / float(2.0 * h);
-        estimates.push_back(std::move(d));
+        estimates.add(d);
     }
     params.displace(scene, 0.0);
 
-    FiniteDifference fd{Image(estimates[0].width, estimates[0].height), Image(), 0.0};
-    if (batches > 1) fd.stderr_img = Image(fd.derivative.width, fd.derivative.height);
-    for (size_t i = 0; i < fd.derivative.pixels.size(); ++i) {
-        Vec3d sum(0.0), sum2(0.0);
-        for (const Image& e : estimates) {
-            const Vec3d v(e.pixels[i]);
-            sum += v;
-            sum2 += v * v;
-        }
-        const Vec3d mean = sum / double(batches);
-        fd.derivative.pixels[i] = Color3f(mean);
-        if (batches > 1) {
-            const Vec3d var = (sum2 / double(batches) - mean * mean) * (double(batches) / (batches - 1));
-            fd.stderr_img.pixels[i] = Color3f(float(std::sqrt(std::max(0.0, var.x) / batches)),
-                                              float(std::sqrt(std::max(0.0, var.y) / batches)),
-                                              float(std::sqrt(std::max(0.0, var.z) / batches)));
-        }
-    }
+    FiniteDifference fd{estimates.mean(), estimates.standard_error(), 0.0};
     fd.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return fd;
 }

@@ -1,5 +1,6 @@
 #include "diff/interior.h"
 
+#include "core/batch_stats.h"
 #include "diff/material_form.h"
 #include "render/path.h"
 #include "render/tiles.h"
@@ -122,34 +123,16 @@ DerivativeImage render_derivative(const Scene& scene, const Parameters& params, 
     check_ready(scene, params);
     if (options.spp <= 0 || options.batches <= 0) throw Error("derivative: spp and batches must be positive");
     const auto start = std::chrono::steady_clock::now();
-    const Film& film = *scene.sensor->film;
     const int B = options.batches;
-    std::vector<PixelSums> batches;
+    ImageBatches primal, derivative;
     for (int b = 0; b < B; ++b) {
         auto progress = options.progress ? std::function<void(float)>([&, b](float f) { options.progress((b + f) / B); })
                                          : std::function<void(float)>();
-        batches.push_back(forward_batch(scene, params, options, options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b), progress));
+        const PixelSums s = forward_batch(scene, params, options, options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b), progress);
+        primal.add(s.primal);
+        derivative.add(s.derivative);
     }
-    DerivativeImage result{Image(film.width, film.height), Image(film.width, film.height), Image(), 0.0};
-    if (B > 1) result.stderr_img = Image(film.width, film.height);
-    for (size_t i = 0; i < result.primal.pixels.size(); ++i) {
-        Vec3d p(0.0), d(0.0), d2(0.0);
-        for (const PixelSums& s : batches) {
-            const Vec3d v(s.derivative.pixels[i]);
-            p += Vec3d(s.primal.pixels[i]);
-            d += v;
-            d2 += v * v;
-        }
-        result.primal.pixels[i] = Color3f(p / double(B));
-        result.derivative.pixels[i] = Color3f(d / double(B));
-        if (B > 1) {
-            const Vec3d mean = d / double(B);
-            const Vec3d var = (d2 / double(B) - mean * mean) * (double(B) / (B - 1));
-            result.stderr_img.pixels[i] = Color3f(float(std::sqrt(std::max(0.0, var.x) / B)),
-                                                  float(std::sqrt(std::max(0.0, var.y) / B)),
-                                                  float(std::sqrt(std::max(0.0, var.z) / B)));
-        }
-    }
+    DerivativeImage result{primal.mean(), derivative.mean(), derivative.standard_error(), 0.0};
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
 }

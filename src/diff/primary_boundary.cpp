@@ -4,9 +4,6 @@
 #include "diff/edges.h"
 #include "diff/material_form.h"
 
-#include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 namespace penumbra {
 
@@ -55,13 +52,6 @@ Silhouettes find_silhouettes(const Scene& scene) {
 
 // One boundary sample: film position s, the detached factor (−L_bg / pdf), and the relative normal velocity
 // v = (s_edge(θ) − s_bg(θ)) · n as a tape expression (its value is ~0; its derivative is the velocity).
-struct BoundarySample {
-    bool valid = false;
-    Vec2f s;
-    Color3f weight;
-    Var velocity;
-};
-
 BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const MaterialForm& form, Sampler& sampler,
                                const PathSettings& settings, RayCounter& rays) {
     BoundarySample out;
@@ -113,90 +103,27 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
     return out;
 }
 
-// Runs `body(sample, sampler)` for every boundary sample, in 16 fixed chunks (deterministic whatever the
-// thread count); `body` gets the chunk index.
-template <typename Body>
-void for_each_boundary_sample(const Scene& scene, const BoundaryOptions& options, const Body& body) {
-    const Film& film = *scene.sensor->film;
-    const uint64_t n = uint64_t(film.width) * film.height * uint64_t(options.samples_per_pixel);
-    constexpr int chunks = 16;
-    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency());
-    arena.execute([&] {
-        tbb::parallel_for(0, chunks, [&](int c) {
-            Sampler sampler;
-            for (uint64_t i = n * c / chunks; i < n * (c + 1) / chunks; ++i) {
-                sampler.start(options.seed ^ 0xB5AD4ECEDA1CE2A9ULL, i, 0);
-                body(c, sampler);
-            }
-        });
-    });
-}
-
-// P_j(s) for every pixel j whose filter reaches s.
-template <typename Visit> void for_each_pixel_near(const Film& film, const Vec2f& s, const Visit& visit) {
-    const ReconstructionFilter& f = *film.rfilter;
-    const float r = f.radius();
-    const int x0 = std::max(0, int(std::floor(s.x - r - 0.5f))), x1 = std::min(film.width - 1, int(s.x + r));
-    const int y0 = std::max(0, int(std::floor(s.y - r - 0.5f))), y1 = std::min(film.height - 1, int(s.y + r));
-    for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
-            const float w = f.eval_normalized(Vec2f(s.x - (x + 0.5f), s.y - (y + 0.5f)));
-            if (w != 0.f) visit(x, y, w);
-        }
-}
+constexpr uint64_t Salt = 0xB5AD4ECEDA1CE2A9ULL;
 
 } // namespace
 
 Image primary_boundary_derivative(const Scene& scene, const Parameters& params, const BoundaryOptions& options) {
-    const Film& film = *scene.sensor->film;
     const Silhouettes sil = find_silhouettes(scene);
-    Image result(film.width, film.height);
-    if (sil.edges.empty()) return result;
+    if (sil.edges.empty()) return Image(scene.sensor->film->width, scene.sensor->film->height);
     const MaterialForm form(params);
-    const double n = double(film.width) * film.height * options.samples_per_pixel;
-    std::vector<Image> chunks(16, Image(film.width, film.height));
-    for_each_boundary_sample(scene, options, [&](int c, Sampler& sampler) {
-        thread_local std::vector<float> tangent;
-        Tape& tape = Tape::current();
-        tape.clear();
-        RayCounter rays;
-        const BoundarySample b = sample_boundary(scene, sil, form, sampler, options.path, rays);
-        if (b.valid && b.velocity.id >= 0 && is_finite(b.weight)) {
-            tape.forward(params.direction().data(), tangent);
-            const Color3f value = b.weight * float(double(tangent[b.velocity.id]) / n);
-            for_each_pixel_near(film, b.s, [&](int x, int y, float w) { chunks[c].at(x, y) += value * w; });
-        }
-        tape.clear();
+    return boundary_derivative(scene, params, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
+        return sample_boundary(scene, sil, form, sampler, options.path, rays);
     });
-    for (const Image& chunk : chunks)
-        for (size_t i = 0; i < result.pixels.size(); ++i) result.pixels[i] += chunk.pixels[i];
-    return result;
 }
 
 void primary_boundary_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                                const BoundaryOptions& options, std::vector<double>& gradient) {
-    const Film& film = *scene.sensor->film;
     const Silhouettes sil = find_silhouettes(scene);
     if (sil.edges.empty()) return;
     const MaterialForm form(params);
-    const double n = double(film.width) * film.height * options.samples_per_pixel;
-    const size_t dim = gradient.size();
-    tbb::enumerable_thread_specific<std::vector<double>> local([dim] { return std::vector<double>(dim, 0.0); });
-    for_each_boundary_sample(scene, options, [&](int, Sampler& sampler) {
-        thread_local std::vector<float> scratch;
-        Tape& tape = Tape::current();
-        tape.clear();
-        RayCounter rays;
-        const BoundarySample b = sample_boundary(scene, sil, form, sampler, options.path, rays);
-        if (b.valid && b.velocity.id >= 0 && is_finite(b.weight)) {
-            double seed = 0;
-            for_each_pixel_near(film, b.s, [&](int x, int y, float w) { seed += w * dot(adjoint.at(x, y), b.weight); });
-            tape.backward({{b.velocity.id, float(seed / n)}}, local.local().data(), scratch);
-        }
-        tape.clear();
-    });
-    for (const auto& g : local)
-        for (size_t k = 0; k < dim; ++k) gradient[k] += g[k];
+    boundary_gradient(scene, adjoint, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
+        return sample_boundary(scene, sil, form, sampler, options.path, rays);
+    }, gradient);
 }
 
 } // namespace penumbra

@@ -7,16 +7,9 @@
 // background side. Silhouette edges are sampled uniformly by projected length.
 #pragma once
 #include "core/image.h"
-#include "diff/interior.h"
+#include "diff/boundary_driver.h"
 
 namespace penumbra {
-
-struct BoundaryOptions {
-    int samples_per_pixel = 4; // boundary samples = this × the number of pixels
-    uint64_t seed = 0;
-    int threads = 0;
-    PathSettings path;
-};
 
 // Forward mode: the primary boundary term's contribution to dI/dθ.
 Image primary_boundary_derivative(const Scene& scene, const Parameters& params, const BoundaryOptions& options);

@@ -1,5 +1,7 @@
 #include "diff/psdr.h"
 
+#include "core/batch_stats.h"
+
 #include <chrono>
 #include <cmath>
 
@@ -16,31 +18,17 @@ void boundary_batches(const Scene& scene, const PsdrOptions& options, int spp, u
     mean = Image(film.width, film.height);
     if (B > 1) stderr_img = Image(film.width, film.height);
     if (spp <= 0) return;
-    std::vector<Image> batches;
+    ImageBatches batches;
     for (int b = 0; b < B; ++b) {
         BoundaryOptions bo;
         bo.samples_per_pixel = spp;
         bo.seed = options.interior.seed + salt * uint64_t(b + 1);
         bo.threads = options.interior.threads;
         bo.path = options.interior.path;
-        batches.push_back(estimate(bo));
+        batches.add(estimate(bo));
     }
-    for (size_t i = 0; i < mean.pixels.size(); ++i) {
-        Vec3d sum(0.0), sum2(0.0);
-        for (const Image& im : batches) {
-            const Vec3d v(im.pixels[i]);
-            sum += v;
-            sum2 += v * v;
-        }
-        const Vec3d m = sum / double(B);
-        mean.pixels[i] = Color3f(m);
-        if (B > 1) {
-            const Vec3d var = (sum2 / double(B) - m * m) * (double(B) / (B - 1));
-            stderr_img.pixels[i] = Color3f(float(std::sqrt(std::max(0.0, var.x) / B)),
-                                           float(std::sqrt(std::max(0.0, var.y) / B)),
-                                           float(std::sqrt(std::max(0.0, var.z) / B)));
-        }
-    }
+    mean = batches.mean();
+    if (B > 1) stderr_img = batches.standard_error();
 }
 
 constexpr uint64_t PrimarySalt = 0x2545F4914F6CDD1DULL, DirectSalt = 0x9FB21C651E98DF25ULL;

@@ -1,0 +1,114 @@
+// What the boundary estimators share: a boundary sample is a film position s, a detached weight (the
+// discontinuity's jump times the measure conversions, over the sampling density) and the normal velocity of the
+// discontinuity as a tape expression. The drivers run the samples in 16 fixed chunks (results do not depend on
+// the thread count), splat weight × dv/dθ through the pixel filter in forward mode, and propagate the
+// filter-weighted adjoint back to the parameters in reverse mode.
+#pragma once
+#include "diff/parameters.h"
+#include "render/path_tracer.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+namespace penumbra {
+
+struct BoundaryOptions {
+    int samples_per_pixel = 4; // boundary samples = this × the number of pixels
+    uint64_t seed = 0;
+    int threads = 0;
+    PathSettings path;
+};
+
+struct BoundarySample {
+    bool valid = false;
+    Vec2f s;        // film position (pixels)
+    Color3f weight; // detached factor
+    Var velocity;   // value ~0; its derivative is the discontinuity's normal velocity
+};
+
+namespace detail {
+
+template <typename Body> void for_each_sample(const Film& film, const BoundaryOptions& options, uint64_t salt, const Body& body) {
+    const uint64_t n = uint64_t(film.width) * film.height * uint64_t(options.samples_per_pixel);
+    constexpr int chunks = 16;
+    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency());
+    arena.execute([&] {
+        tbb::parallel_for(0, chunks, [&](int c) {
+            Sampler sampler;
+            for (uint64_t i = n * c / chunks; i < n * (c + 1) / chunks; ++i) {
+                sampler.start(options.seed ^ salt, i, 0);
+                body(c, sampler);
+            }
+        });
+    });
+}
+
+// visit(x, y, P_j(s)) for every pixel j whose normalized filter reaches s.
+template <typename Visit> void for_each_pixel_near(const Film& film, const Vec2f& s, const Visit& visit) {
+    const ReconstructionFilter& f = *film.rfilter;
+    const float r = f.radius();
+    const int x0 = std::max(0, int(std::floor(s.x - r - 0.5f))), x1 = std::min(film.width - 1, int(s.x + r));
+    const int y0 = std::max(0, int(std::floor(s.y - r - 0.5f))), y1 = std::min(film.height - 1, int(s.y + r));
+    for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+            const float w = f.eval_normalized(Vec2f(s.x - (x + 0.5f), s.y - (y + 0.5f)));
+            if (w != 0.f) visit(x, y, w);
+        }
+}
+
+} // namespace detail
+
+// Forward mode: Σ_samples P_j(s) weight dv/dθ / N for every pixel j. `sample(Sampler&, RayCounter&)` draws
+// one BoundarySample (recording its velocity on the thread's tape).
+template <typename SampleFn>
+Image boundary_derivative(const Scene& scene, const Parameters& params, const BoundaryOptions& options, uint64_t salt,
+                          const SampleFn& sample) {
+    const Film& film = *scene.sensor->film;
+    const double n = double(film.width) * film.height * options.samples_per_pixel;
+    std::vector<Image> chunks(16, Image(film.width, film.height));
+    detail::for_each_sample(film, options, salt, [&](int c, Sampler& sampler) {
+        thread_local std::vector<float> tangent;
+        Tape& tape = Tape::current();
+        tape.clear();
+        RayCounter rays;
+        const BoundarySample b = sample(sampler, rays);
+        if (b.valid && b.velocity.id >= 0 && is_finite(b.weight)) {
+            tape.forward(params.direction().data(), tangent);
+            const Color3f value = b.weight * float(double(tangent[b.velocity.id]) / n);
+            detail::for_each_pixel_near(film, b.s, [&](int x, int y, float w) { chunks[c].at(x, y) += value * w; });
+        }
+        tape.clear();
+    });
+    Image result(film.width, film.height);
+    for (const Image& chunk : chunks)
+        for (size_t i = 0; i < result.pixels.size(); ++i) result.pixels[i] += chunk.pixels[i];
+    return result;
+}
+
+// Reverse mode: adds Σ_samples (Σ_j adjoint_j P_j(s)) · weight · dv/dθ / N to `gradient`.
+template <typename SampleFn>
+void boundary_gradient(const Scene& scene, const Image& adjoint, const BoundaryOptions& options, uint64_t salt,
+                       const SampleFn& sample, std::vector<double>& gradient) {
+    const Film& film = *scene.sensor->film;
+    const double n = double(film.width) * film.height * options.samples_per_pixel;
+    const size_t dim = gradient.size();
+    tbb::enumerable_thread_specific<std::vector<double>> local([dim] { return std::vector<double>(dim, 0.0); });
+    detail::for_each_sample(film, options, salt, [&](int, Sampler& sampler) {
+        thread_local std::vector<float> scratch;
+        Tape& tape = Tape::current();
+        tape.clear();
+        RayCounter rays;
+        const BoundarySample b = sample(sampler, rays);
+        if (b.valid && b.velocity.id >= 0 && is_finite(b.weight)) {
+            double seed = 0;
+            detail::for_each_pixel_near(film, b.s, [&](int x, int y, float w) { seed += w * dot(adjoint.at(x, y), b.weight); });
+            tape.backward({{b.velocity.id, float(seed / n)}}, local.local().data(), scratch);
+        }
+        tape.clear();
+    });
+    for (const auto& g : local)
+        for (size_t k = 0; k < dim; ++k) gradient[k] += g[k];
+}
+
+} // namespace penumbra
