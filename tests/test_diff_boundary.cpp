@@ -101,6 +101,12 @@ TEST(DirectBoundary, ShadowOfATranslatingOccluder) {
     EXPECT_GT(std::abs(interior.comparison.mean_z), 4.0) << "the interior term alone must miss the moving shadow";
 }
 
+// (e) A translating area light, partly occluded (the blocker is outside the view): the interior term (next-event
+// segments to the moving light, in material form) and the direct boundary term (the moving penumbra) together.
+TEST(DirectBoundary, TranslatingAreaLightPartlyOccluded) {
+    expect_boundary_matters("moving_light.xml", "lamp.translate=1,0,0", 2e-2, 256, 256, false, true);
+}
+
 // Reverse mode includes the boundary term: ⟨a, (interior + boundary) v⟩ = ⟨gradient, v⟩ on the same samples.
 TEST(PrimaryBoundary, ReverseModeIncludesTheBoundaryTerm) {
     auto scene = load_scene(validation + "silhouette.xml", {{"res", "24"}});
