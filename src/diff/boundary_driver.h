@@ -5,6 +5,7 @@
 // filter-weighted adjoint back to the parameters in reverse mode.
 #pragma once
 #include "diff/parameters.h"
+#include "render/film_footprint.h"
 #include "render/path_tracer.h"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -44,19 +45,6 @@ template <typename Body> void for_each_sample(const Film& film, const BoundaryOp
     });
 }
 
-// visit(x, y, P_j(s)) for every pixel j whose normalized filter reaches s.
-template <typename Visit> void for_each_pixel_near(const Film& film, const Vec2f& s, const Visit& visit) {
-    const ReconstructionFilter& f = *film.rfilter;
-    const float r = f.radius();
-    const int x0 = std::max(0, int(std::floor(s.x - r - 0.5f))), x1 = std::min(film.width - 1, int(s.x + r));
-    const int y0 = std::max(0, int(std::floor(s.y - r - 0.5f))), y1 = std::min(film.height - 1, int(s.y + r));
-    for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
-            const float w = f.eval_normalized(Vec2f(s.x - (x + 0.5f), s.y - (y + 0.5f)));
-            if (w != 0.f) visit(x, y, w);
-        }
-}
-
 } // namespace detail
 
 // Forward mode: Σ_samples P_j(s) weight dv/dθ / N for every pixel j. `sample(Sampler&, RayCounter&)` draws
@@ -76,7 +64,7 @@ Image boundary_derivative(const Scene& scene, const Parameters& params, const Bo
         if (b.valid && b.velocity.id >= 0 && is_finite(b.weight)) {
             tape.forward(params.direction().data(), tangent);
             const Color3f value = b.weight * float(double(tangent[b.velocity.id]) / n);
-            detail::for_each_pixel_near(film, b.s, [&](int x, int y, float w) { chunks[c].at(x, y) += value * w; });
+            for_each_pixel_in_footprint(film, b.s, [&](int x, int y, float w) { chunks[c].at(x, y) += value * w; });
         }
         tape.clear();
     });
@@ -102,7 +90,7 @@ void boundary_gradient(const Scene& scene, const Image& adjoint, const BoundaryO
         const BoundarySample b = sample(sampler, rays);
         if (b.valid && b.velocity.id >= 0 && is_finite(b.weight)) {
             double seed = 0;
-            detail::for_each_pixel_near(film, b.s, [&](int x, int y, float w) { seed += w * dot(adjoint.at(x, y), b.weight); });
+            for_each_pixel_in_footprint(film, b.s, [&](int x, int y, float w) { seed += w * dot(adjoint.at(x, y), b.weight); });
             tape.backward({{b.velocity.id, float(seed / n)}}, local.local().data(), scratch);
         }
         tape.clear();

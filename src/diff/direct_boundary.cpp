@@ -8,21 +8,24 @@
 
 namespace penumbra {
 
-namespace {
-
-struct SceneEdge {
-    const Shape* shape;
-    Edge edge;
-};
-
-struct EdgeSet {
+// Every discontinuity edge of the scene, sampled by length.
+struct DirectBoundary::EdgeSet {
+    struct SceneEdge {
+        const Shape* shape;
+        Edge edge;
+    };
     std::vector<SceneEdge> edges;
     DiscreteDistribution by_length;
     float total_length = 0.f;
 };
 
-EdgeSet all_edges(const Scene& scene) {
-    EdgeSet out;
+namespace {
+
+using EdgeSet = DirectBoundary::EdgeSet;
+
+std::unique_ptr<const EdgeSet> all_edges(const Scene& scene) {
+    auto result = std::make_unique<EdgeSet>();
+    EdgeSet& out = *result;
     std::vector<float> lengths;
     for (const auto& shape : scene.shapes)
         for (const Edge& e : discontinuity_edges(shape->mesh)) {
@@ -33,7 +36,7 @@ EdgeSet all_edges(const Scene& scene) {
             out.total_length += l;
         }
     if (!lengths.empty()) out.by_length = DiscreteDistribution(lengths);
-    return out;
+    return result;
 }
 
 // A point on an emitter that next-event estimation could have chosen.
@@ -70,7 +73,7 @@ BoundarySample sample_direct(const Scene& scene, const EdgeSet& edges, const Mat
     BoundarySample out;
     const Sensor& sensor = *scene.sensor;
     float u = sampler.next_1d();
-    const SceneEdge& se = edges.edges[edges.by_length.sample(u)];
+    const EdgeSet::SceneEdge& se = edges.edges[edges.by_length.sample(u)];
     const float tau = u;
     const TriangleMesh& m = se.shape->mesh;
     const Vec3f a = m.positions[se.edge.v0], b = m.positions[se.edge.v1];
@@ -113,14 +116,10 @@ BoundarySample sample_direct(const Scene& scene, const EdgeSet& edges, const Mat
     if (!sensor.film_position(x_d, recv.n, s, jacobian)) return out;
     if (!(s.x >= 0.f && s.y >= 0.f && s.x <= sensor.film->width && s.y <= sensor.film->height)) return out;
     const Vec3f to_cam = sensor.to_sensor(x_d);
-    const Ray cam_ray = recv.spawn_ray(to_cam);
     rays.rays += 1;
-    if (sensor.plugin != "orthographic") {
-        Ray r = recv.spawn_ray_to(sensor.to_world.apply_point(Vec3f(0.f)));
-        if (scene.occluded(r)) return out;
-    } else if (scene.occluded(cam_ray)) {
-        return out;
-    }
+    const Ray cam_ray = sensor.plugin == "orthographic" ? recv.spawn_ray(to_cam)
+                                                        : recv.spawn_ray_to(sensor.to_world.apply_point(Vec3f(0.f)));
+    if (scene.occluded(cam_ray)) return out;
 
     // The shadow curve on the receiver: tangent from a nearby edge point, normal into the shadow.
     const uint32_t* tri = &recv.shape->mesh.indices[3 * size_t(recv.prim_index)];
@@ -167,22 +166,24 @@ constexpr uint64_t Salt = 0x94D049BB133111EBULL;
 
 } // namespace
 
-Image direct_boundary_derivative(const Scene& scene, const Parameters& params, const BoundaryOptions& options) {
-    const EdgeSet edges = all_edges(scene);
-    if (edges.edges.empty() || scene.emitters.empty()) return Image(scene.sensor->film->width, scene.sensor->film->height);
+DirectBoundary::DirectBoundary(const Scene& scene) : scene_(scene), edges_(all_edges(scene)) {}
+DirectBoundary::~DirectBoundary() = default;
+
+Image DirectBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
+    if (edges_->edges.empty() || scene_.emitters.empty())
+        return Image(scene_.sensor->film->width, scene_.sensor->film->height);
     const MaterialForm form(params);
-    return boundary_derivative(scene, params, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
-        return sample_direct(scene, edges, form, sampler, rays);
+    return boundary_derivative(scene_, params, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
+        return sample_direct(scene_, *edges_, form, sampler, rays);
     });
 }
 
-void direct_boundary_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
-                              const BoundaryOptions& options, std::vector<double>& gradient) {
-    const EdgeSet edges = all_edges(scene);
-    if (edges.edges.empty() || scene.emitters.empty()) return;
+void DirectBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
+                              std::vector<double>& gradient) const {
+    if (edges_->edges.empty() || scene_.emitters.empty()) return;
     const MaterialForm form(params);
-    boundary_gradient(scene, adjoint, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
-        return sample_direct(scene, edges, form, sampler, rays);
+    boundary_gradient(scene_, adjoint, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
+        return sample_direct(scene_, *edges_, form, sampler, rays);
     }, gradient);
 }
 

@@ -7,12 +7,28 @@
 // sampled from edge points x_B (uniform by length) and emitter samples y, extending y -> x_B to the receiver,
 // with dℓ(x_D) = |dx_D/dx_B| dℓ(x_B) along the edge.
 #pragma once
-#include "diff/primary_boundary.h"
+#include "diff/boundary_driver.h"
+
+#include <memory>
 
 namespace penumbra {
 
-Image direct_boundary_derivative(const Scene& scene, const Parameters& params, const BoundaryOptions& options);
-void direct_boundary_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
-                              const BoundaryOptions& options, std::vector<double>& gradient);
+class DirectBoundary {
+public:
+    // Collects the scene's discontinuity edges (once; they depend only on the scene).
+    explicit DirectBoundary(const Scene& scene);
+    ~DirectBoundary();
+    // Forward mode: the direct boundary term's contribution to dI/dθ.
+    Image derivative(const Parameters& params, const BoundaryOptions& options) const;
+    // Reverse mode: adds Σ_pixels adjoint · (direct boundary term) to `gradient`.
+    void gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
+                  std::vector<double>& gradient) const;
+
+    struct EdgeSet; // the prepared edges (defined in the .cpp)
+
+private:
+    const Scene& scene_;
+    std::unique_ptr<const EdgeSet> edges_;
+};
 
 } // namespace penumbra

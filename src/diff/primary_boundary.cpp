@@ -4,32 +4,33 @@
 #include "diff/edges.h"
 #include "diff/material_form.h"
 
-
 namespace penumbra {
-
-namespace {
-
-struct SilhouetteEdge {
-    const Shape* shape;
-    Edge edge;
-    Vec2f s0, s1;    // projected endpoints (pixels)
-    float z0, z1;    // depths along the view direction (perspective-correct interpolation)
-};
 
 // Silhouette edges as seen from the reference camera, with their projections. Edges with an endpoint behind
 // the camera are skipped.
-struct Silhouettes {
+struct PrimaryBoundary::Silhouettes {
+    struct SilhouetteEdge {
+        const Shape* shape;
+        Edge edge;
+        Vec2f s0, s1; // projected endpoints (pixels)
+        float z0, z1; // depths along the view direction (perspective-correct interpolation)
+    };
     std::vector<SilhouetteEdge> edges;
     DiscreteDistribution by_length;
     float total_length = 0.f;
 };
 
-Silhouettes find_silhouettes(const Scene& scene) {
+namespace {
+
+using Silhouettes = PrimaryBoundary::Silhouettes;
+
+std::unique_ptr<const Silhouettes> find_silhouettes(const Scene& scene) {
     const Sensor& sensor = *scene.sensor;
     const bool parallel = sensor.plugin == "orthographic";
     const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
     const Vec3f forward = normalize(sensor.to_world.apply_vector(Vec3f(0.f, 0.f, 1.f)));
-    Silhouettes out;
+    auto result = std::make_unique<Silhouettes>();
+    Silhouettes& out = *result;
     std::vector<float> lengths;
     for (const auto& shape : scene.shapes) {
         const TriangleMesh& m = shape->mesh;
@@ -47,7 +48,7 @@ Silhouettes find_silhouettes(const Scene& scene) {
         }
     }
     if (!lengths.empty()) out.by_length = DiscreteDistribution(lengths);
-    return out;
+    return result;
 }
 
 // One boundary sample: film position s, the detached factor (−L_bg / pdf), and the relative normal velocity
@@ -57,7 +58,7 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
     BoundarySample out;
     const Sensor& sensor = *scene.sensor;
     float u = sampler.next_1d();
-    const SilhouetteEdge& se = sil.edges[sil.by_length.sample(u)];
+    const Silhouettes::SilhouetteEdge& se = sil.edges[sil.by_length.sample(u)];
     const float t = u;
     out.s = se.s0 + (se.s1 - se.s0) * t;
     // The 3D edge point projecting to s (perspective-correct along the edge; affine for a parallel projection).
@@ -107,22 +108,23 @@ constexpr uint64_t Salt = 0xB5AD4ECEDA1CE2A9ULL;
 
 } // namespace
 
-Image primary_boundary_derivative(const Scene& scene, const Parameters& params, const BoundaryOptions& options) {
-    const Silhouettes sil = find_silhouettes(scene);
-    if (sil.edges.empty()) return Image(scene.sensor->film->width, scene.sensor->film->height);
+PrimaryBoundary::PrimaryBoundary(const Scene& scene) : scene_(scene), silhouettes_(find_silhouettes(scene)) {}
+PrimaryBoundary::~PrimaryBoundary() = default;
+
+Image PrimaryBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
+    if (silhouettes_->edges.empty()) return Image(scene_.sensor->film->width, scene_.sensor->film->height);
     const MaterialForm form(params);
-    return boundary_derivative(scene, params, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
-        return sample_boundary(scene, sil, form, sampler, options.path, rays);
+    return boundary_derivative(scene_, params, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
+        return sample_boundary(scene_, *silhouettes_, form, sampler, options.path, rays);
     });
 }
 
-void primary_boundary_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
-                               const BoundaryOptions& options, std::vector<double>& gradient) {
-    const Silhouettes sil = find_silhouettes(scene);
-    if (sil.edges.empty()) return;
+void PrimaryBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
+                               std::vector<double>& gradient) const {
+    if (silhouettes_->edges.empty()) return;
     const MaterialForm form(params);
-    boundary_gradient(scene, adjoint, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
-        return sample_boundary(scene, sil, form, sampler, options.path, rays);
+    boundary_gradient(scene_, adjoint, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
+        return sample_boundary(scene_, *silhouettes_, form, sampler, options.path, rays);
     }, gradient);
 }
 

@@ -9,12 +9,26 @@
 #include "core/image.h"
 #include "diff/boundary_driver.h"
 
+#include <memory>
+
 namespace penumbra {
 
-// Forward mode: the primary boundary term's contribution to dI/dθ.
-Image primary_boundary_derivative(const Scene& scene, const Parameters& params, const BoundaryOptions& options);
-// Reverse mode: adds Σ_pixels adjoint · (primary boundary term) to `gradient`.
-void primary_boundary_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
-                               const BoundaryOptions& options, std::vector<double>& gradient);
+class PrimaryBoundary {
+public:
+    // Finds the silhouette edges seen from the reference camera (once; they depend only on the scene).
+    explicit PrimaryBoundary(const Scene& scene);
+    ~PrimaryBoundary();
+    // Forward mode: the primary boundary term's contribution to dI/dθ.
+    Image derivative(const Parameters& params, const BoundaryOptions& options) const;
+    // Reverse mode: adds Σ_pixels adjoint · (primary boundary term) to `gradient`.
+    void gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
+                  std::vector<double>& gradient) const;
+
+    struct Silhouettes; // the prepared edges (defined in the .cpp)
+
+private:
+    const Scene& scene_;
+    std::unique_ptr<const Silhouettes> silhouettes_;
+};
 
 } // namespace penumbra

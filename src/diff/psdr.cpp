@@ -39,10 +39,10 @@ PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, con
     PsdrDerivative out;
     out.interior = render_derivative(scene, params, options.interior);
     boundary_batches(scene, options, options.primary_spp, PrimarySalt,
-                     [&](const BoundaryOptions& bo) { return primary_boundary_derivative(scene, params, bo); },
+                     [&, primary = PrimaryBoundary(scene)](const BoundaryOptions& bo) { return primary.derivative(params, bo); },
                      out.primary, out.primary_stderr);
     boundary_batches(scene, options, options.direct_spp, DirectSalt,
-                     [&](const BoundaryOptions& bo) { return direct_boundary_derivative(scene, params, bo); },
+                     [&, direct = DirectBoundary(scene)](const BoundaryOptions& bo) { return direct.derivative(params, bo); },
                      out.direct, out.direct_stderr);
     const Film& film = *scene.sensor->film;
     out.total = Image(film.width, film.height);
@@ -69,12 +69,12 @@ Gradient psdr_gradient(const Scene& scene, const Parameters& params, const Image
     if (options.primary_spp > 0) {
         bo.samples_per_pixel = options.primary_spp;
         bo.seed = options.interior.seed + PrimarySalt;
-        primary_boundary_gradient(scene, params, adjoint, bo, g.values);
+        PrimaryBoundary(scene).gradient(params, adjoint, bo, g.values);
     }
     if (options.direct_spp > 0) {
         bo.samples_per_pixel = options.direct_spp;
         bo.seed = options.interior.seed + DirectSalt;
-        direct_boundary_gradient(scene, params, adjoint, bo, g.values);
+        DirectBoundary(scene).gradient(params, adjoint, bo, g.values);
     }
     g.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return g;

@@ -8,6 +8,8 @@
 // | hide_emitters  | boolean | false   | do not show directly visible emitters                      |
 #include "render/ptracer.h"
 
+#include "render/film_footprint.h"
+
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -27,18 +29,6 @@ ParticleTracer::ParticleTracer(const Properties& props) {
 
 namespace {
 
-// Adds `value` at continuous film position `pos`, spread over the pixels by the normalized filter.
-void splat(Image& image, const ReconstructionFilter& filter, const Vec2f& pos, const Color3f& value) {
-    const float r = filter.radius();
-    const int x0 = std::max(0, int(std::floor(pos.x - r - 0.5f))), x1 = std::min(image.width - 1, int(pos.x + r));
-    const int y0 = std::max(0, int(std::floor(pos.y - r - 0.5f))), y1 = std::min(image.height - 1, int(pos.y + r));
-    for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
-            const float w = filter.eval_normalized(Vec2f(x + 0.5f - pos.x, y + 0.5f - pos.y));
-            if (w != 0.f) image.at(x, y) += value * w;
-        }
-}
-
 // Shading-normal correction of the adjoint BSDF (Veach 1997, Eq. 5.17): |w_prev·n_s||w_next·n_g| / (|w_prev·n_g||w_next·n_s|),
 // applied on top of eval()'s |w_next·n_s| factor. w_prev points toward the light, w_next toward the camera side.
 float adjoint_shading_correction(const SurfaceInteraction3f& si, const Vec3f& w_next_world) {
@@ -53,7 +43,10 @@ float adjoint_shading_correction(const SurfaceInteraction3f& si, const Vec3f& w_
 void ParticleTracer::trace(const Scene& scene, Sampler& sampler, Image& image, RayCounter& rays) const {
     const BSDFContext ctx{TransportMode::Importance};
     const Sensor& sensor = *scene.sensor;
-    const ReconstructionFilter& filter = *sensor.film->rfilter;
+    const Film& film = *sensor.film;
+    auto splat = [&](const Vec2f& pos, const Color3f& value) {
+        for_each_pixel_in_footprint(film, pos, [&](int x, int y, float w) { image.at(x, y) += value * w; });
+    };
     const unsigned max_depth = unsigned(max_depth_);
     if (max_depth_ == 0 || scene.emitters.empty()) return;
 
@@ -77,7 +70,7 @@ void ParticleTracer::trace(const Scene& scene, Sampler& sampler, Image& image, R
             si.wi = si.to_local(sds.d); // toward the camera
             const Color3f Le = emitter->eval(si);
             const float cos_x = std::abs(dot(ps.n, sds.d));
-            splat(image, filter, sds.uv, Le * sw * (cos_x / (ps.pdf * pdf_sel)));
+            splat(sds.uv, Le * sw * (cos_x / (ps.pdf * pdf_sel)));
         }
     }
 
@@ -100,7 +93,7 @@ void ParticleTracer::trace(const Scene& scene, Sampler& sampler, Image& image, R
             if (!is_black(sw) && !scene.occluded(si.spawn_ray_to(sds.p))) {
                 const Vec3f w_next = sds.d; // from si toward the camera
                 const Color3f f = bsdf->eval(ctx, si, si.to_local(w_next)) * adjoint_shading_correction(si, w_next);
-                splat(image, filter, sds.uv, throughput * f * sw);
+                splat(sds.uv, throughput * f * sw);
             }
         }
         if (depth + 1 >= max_depth) break;
