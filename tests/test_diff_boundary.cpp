@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+
 using namespace penumbra;
 using namespace penumbra::test;
 
@@ -18,7 +20,7 @@ struct BoundaryRun {
 };
 
 BoundaryRun run(const std::string& scene_file, const std::string& param, double h, int boundary_spp, int fd_spp,
-                bool primary, bool direct, int res, const std::string& light) {
+                bool primary, bool direct, bool indirect, int res, const std::string& light) {
     auto scene = load_scene(validation + scene_file, {{"res", std::to_string(res)}, {"light", light}});
     Parameters params(*scene);
     params.enable({parse_param_selection(param)});
@@ -29,6 +31,7 @@ BoundaryRun run(const std::string& scene_file, const std::string& param, double 
     o.interior.path = path_settings(*scene);
     o.primary_spp = primary ? boundary_spp : 0;
     o.direct_spp = direct ? boundary_spp : 0;
+    o.indirect_spp = indirect ? boundary_spp : 0;
     BoundaryRun r{psdr_derivative(*scene, params, o), {}};
     RenderOptions ro;
     ro.spp = fd_spp;
@@ -39,8 +42,9 @@ BoundaryRun run(const std::string& scene_file, const std::string& param, double 
 
 // Each boundary estimator is validated on its own scene (issue 4: separate estimators, separate budgets).
 void expect_boundary_matters(const std::string& scene_file, const std::string& param, double h, int boundary_spp,
-                             int fd_spp, bool primary, bool direct, int res = 32, const std::string& light = "area") {
-    const BoundaryRun r = run(scene_file, param, h, boundary_spp, fd_spp, primary, direct, res, light);
+                             int fd_spp, bool primary, bool direct, bool indirect = false, int res = 32,
+                             const std::string& light = "area") {
+    const BoundaryRun r = run(scene_file, param, h, boundary_spp, fd_spp, primary, direct, indirect, res, light);
     const DiffCheck total = check_against(r.d.total, r.d.total_stderr, r.fd.derivative, r.fd.stderr_img);
     const DiffCheck interior = check_against(r.d.interior.derivative, r.d.interior.stderr_img, r.fd.derivative, r.fd.stderr_img);
     std::printf("  %s %s: interior+boundary %s\n  interior only %s\n", scene_file.c_str(), param.c_str(),
@@ -80,6 +84,7 @@ TEST(DirectBoundary, ShadowOfATranslatingOccluder) {
     o.interior.path = path_settings(*scene);
     o.primary_spp = 0;
     o.direct_spp = 1024;
+    o.indirect_spp = 0;
     const PsdrDerivative d = psdr_derivative(*scene, params, o);
     RenderOptions ro;
     ro.spp = 1024;
@@ -107,28 +112,53 @@ TEST(DirectBoundary, TranslatingAreaLightPartlyOccluded) {
     expect_boundary_matters("moving_light.xml", "lamp.translate=1,0,0", 2e-2, 256, 256, false, true);
 }
 
-// Reverse mode includes the boundary term: ⟨a, (interior + boundary) v⟩ = ⟨gradient, v⟩ on the same samples.
-TEST(PrimaryBoundary, ReverseModeIncludesTheBoundaryTerm) {
-    auto scene = load_scene(validation + "silhouette.xml", {{"res", "24"}});
+// (c) A shadow and a silhouette seen only through a glossy reflection: the indirect boundary term's two
+// techniques (emitter sources with the detector subpath one bounce long; multi-directional segments from the wall
+// past the cube's edges to the floor).
+TEST(IndirectBoundary, ShadowSeenThroughAGlossyReflection) {
+    expect_boundary_matters("glossy_shadow.xml", "cube.translate=1,0,0", 2e-2, 512, 512, true, true, true, 32, "point");
+}
+
+// Reverse mode includes the boundary terms: ⟨a, (interior + boundary) v⟩ = ⟨gradient, v⟩ on the same samples
+// (psdr_gradient uses the seeds of psdr_derivative's single batch).
+void expect_reverse_matches_forward(const std::string& scene_file, const std::string& param, const PsdrOptions& base,
+                                    const std::map<std::string, std::string>& defines) {
+    auto scene = load_scene(validation + scene_file, defines);
     Parameters params(*scene);
-    params.enable({parse_param_selection("box.translate=1,0,0")});
-    PsdrOptions o;
-    o.interior.spp = 4;
-    o.interior.seed = 5;
+    params.enable({parse_param_selection(param)});
+    PsdrOptions o = base;
     o.interior.path = path_settings(*scene);
-    o.primary_spp = 8;
-    // The same seeds as psdr_gradient uses for its single batch.
     const PsdrDerivative forward = psdr_derivative(*scene, params, o);
-    Image adjoint(24, 24);
+    const Film& film = *scene->sensor->film;
+    Image adjoint(film.width, film.height);
     PCG32 rng(3);
     for (auto& a : adjoint.pixels) a = Color3f(rng.next_float(), rng.next_float(), rng.next_float());
     const Gradient reverse = psdr_gradient(*scene, params, adjoint, o);
     double lhs = 0, scale = 0, boundary = 0;
     for (size_t i = 0; i < adjoint.pixels.size(); ++i) {
-        lhs += dot(Vec3d(adjoint.pixels[i]), Vec3d(forward.total.pixels[i]));
-        scale += std::abs(dot(Vec3d(adjoint.pixels[i]), Vec3d(forward.total.pixels[i])));
-        boundary += std::abs(dot(Vec3d(adjoint.pixels[i]), Vec3d(forward.primary.pixels[i])));
+        const Vec3d a(adjoint.pixels[i]);
+        lhs += dot(a, Vec3d(forward.total.pixels[i]));
+        scale += std::abs(dot(a, Vec3d(forward.total.pixels[i])));
+        boundary += std::abs(dot(a, Vec3d(forward.primary.pixels[i]))) + std::abs(dot(a, Vec3d(forward.direct.pixels[i]))) +
+                    std::abs(dot(a, Vec3d(forward.indirect.pixels[i])));
     }
-    EXPECT_GT(boundary, 0.05 * scale) << "the boundary term should be a sizeable part of this derivative";
+    EXPECT_GT(boundary, 0.05 * scale) << "the boundary terms should be a sizeable part of this derivative";
     EXPECT_NEAR(lhs, reverse.values[0], 1e-4 * scale + 1e-6) << "⟨a, Jv⟩ = " << lhs << ", ⟨Jᵀa, v⟩ = " << reverse.values[0];
+}
+
+TEST(PrimaryBoundary, ReverseModeIncludesTheBoundaryTerm) {
+    PsdrOptions o;
+    o.interior.spp = 4;
+    o.interior.seed = 5;
+    o.primary_spp = 8;
+    expect_reverse_matches_forward("silhouette.xml", "box.translate=1,0,0", o, {{"res", "24"}});
+}
+
+TEST(IndirectBoundary, ReverseModeIncludesTheBoundaryTerm) {
+    PsdrOptions o;
+    o.interior.spp = 4;
+    o.interior.seed = 5;
+    o.primary_spp = o.direct_spp = 0;
+    o.indirect_spp = 16;
+    expect_reverse_matches_forward("glossy_shadow.xml", "cube.translate=1,0,0", o, {{"res", "24"}});
 }

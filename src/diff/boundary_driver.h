@@ -8,6 +8,9 @@
 #include "render/film_footprint.h"
 #include "render/path_tracer.h"
 
+#include <array>
+#include <utility>
+
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -26,6 +29,24 @@ struct BoundarySample {
     Vec2f s;        // film position (pixels)
     Color3f weight; // detached factor
     Var velocity;   // value ~0; its derivative is the discontinuity's normal velocity
+    // Further splats of the same discontinuity (a detector subpath connected to the camera at several vertices).
+    static constexpr int MaxMore = 7;
+    std::array<std::pair<Vec2f, Color3f>, MaxMore> more;
+    int n_more = 0;
+
+    void add_splat(const Vec2f& at, const Color3f& w) {
+        if (!valid) s = at, weight = w, valid = true;
+        else if (n_more < MaxMore) more[n_more++] = {at, w};
+    }
+    template <typename Visit> void for_each_splat(const Visit& visit) const {
+        visit(s, weight);
+        for (int k = 0; k < n_more; ++k) visit(more[k].first, more[k].second);
+    }
+    bool finite() const {
+        bool ok = true;
+        for_each_splat([&](const Vec2f&, const Color3f& w) { ok = ok && is_finite(w); });
+        return ok;
+    }
 };
 
 namespace detail {
@@ -61,10 +82,13 @@ Image boundary_derivative(const Scene& scene, const Parameters& params, const Bo
         tape.clear();
         RayCounter rays;
         const BoundarySample b = sample(sampler, rays);
-        if (b.valid && b.velocity.id >= 0 && is_finite(b.weight)) {
+        if (b.valid && b.velocity.id >= 0 && b.finite()) {
             tape.forward(params.direction().data(), tangent);
-            const Color3f value = b.weight * float(double(tangent[b.velocity.id]) / n);
-            for_each_pixel_in_footprint(film, b.s, [&](int x, int y, float w) { chunks[c].at(x, y) += value * w; });
+            const float dv = float(double(tangent[b.velocity.id]) / n);
+            b.for_each_splat([&](const Vec2f& s, const Color3f& weight) {
+                const Color3f value = weight * dv;
+                for_each_pixel_in_footprint(film, s, [&](int x, int y, float w) { chunks[c].at(x, y) += value * w; });
+            });
         }
         tape.clear();
     });
@@ -88,9 +112,11 @@ void boundary_gradient(const Scene& scene, const Image& adjoint, const BoundaryO
         tape.clear();
         RayCounter rays;
         const BoundarySample b = sample(sampler, rays);
-        if (b.valid && b.velocity.id >= 0 && is_finite(b.weight)) {
+        if (b.valid && b.velocity.id >= 0 && b.finite()) {
             double seed = 0;
-            for_each_pixel_in_footprint(film, b.s, [&](int x, int y, float w) { seed += w * dot(adjoint.at(x, y), b.weight); });
+            b.for_each_splat([&](const Vec2f& s, const Color3f& weight) {
+                for_each_pixel_in_footprint(film, s, [&](int x, int y, float w) { seed += w * dot(adjoint.at(x, y), weight); });
+            });
             tape.backward({{b.velocity.id, float(seed / n)}}, local.local().data(), scratch);
         }
         tape.clear();

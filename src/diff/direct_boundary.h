@@ -5,13 +5,20 @@
 // with W_j the camera importance (filter at the projection times |ds/dA|), v the velocity of the shadow
 // curve relative to the receiver's material motion and n_shadow its normal pointing into the shadow. It is
 // sampled from edge points x_B (uniform by length) and emitter samples y, extending y -> x_B to the receiver,
-// with dℓ(x_D) = |dx_D/dx_B| dℓ(x_B) along the edge.
+// with dℓ(x_D) = |dx_D/dx_B| dℓ(x_B) along the edge (diff/boundary_segment.h).
 #pragma once
 #include "diff/boundary_driver.h"
+#include "diff/boundary_segment.h"
 
 #include <memory>
 
 namespace penumbra {
+
+// One boundary sample whose source endpoint is an emitter sample, with the detector subpath's camera
+// connections at depths t_min..t_max (diff/detector_subpath.h): the direct term uses t = 0 only, the
+// indirect term t ≥ 1.
+BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edges, const MaterialForm& form, int t_min,
+                                       int t_max, const PathSettings& settings, Sampler& sampler, RayCounter& rays);
 
 class DirectBoundary {
 public:
@@ -24,11 +31,9 @@ public:
     void gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
                   std::vector<double>& gradient) const;
 
-    struct EdgeSet; // the prepared edges (defined in the .cpp)
-
 private:
     const Scene& scene_;
-    std::unique_ptr<const EdgeSet> edges_;
+    std::unique_ptr<const SceneEdges> edges_;
 };
 
 } // namespace penumbra

@@ -1,10 +1,11 @@
 // The total derivative of paper 001 Eq. 19 as separate estimators with their own sample budgets: the interior
-// term (diff/interior.h) plus the boundary terms. Implemented boundary terms: primary (camera segments,
-// diff/primary_boundary.h) and direct (next-event segments, diff/direct_boundary.h); the indirect boundary
-// term is not implemented yet. Each term's image is kept for validation against finite differences.
+// term (diff/interior.h) plus the boundary terms: primary (camera segments, diff/primary_boundary.h), direct
+// (emitter segments seen by the camera, diff/direct_boundary.h) and indirect (every other boundary segment,
+// diff/indirect_boundary.h). Each term's image is kept for validation against finite differences.
 #pragma once
 #include "diff/interior.h"
 #include "diff/direct_boundary.h"
+#include "diff/indirect_boundary.h"
 #include "diff/primary_boundary.h"
 
 namespace penumbra {
@@ -13,6 +14,7 @@ struct PsdrOptions {
     DiffOptions interior;
     int primary_spp = 4;      // primary boundary samples per pixel (per batch); 0 disables the term
     int direct_spp = 4;       // direct boundary samples per pixel (per batch); 0 disables the term
+    int indirect_spp = 4;     // indirect boundary samples per pixel and technique (per batch); 0 disables it
 };
 
 struct PsdrDerivative {
@@ -21,6 +23,8 @@ struct PsdrDerivative {
     Image primary_stderr;      // its per-pixel standard error (empty with one batch)
     Image direct;              // direct boundary term
     Image direct_stderr;
+    Image indirect;            // indirect boundary term
+    Image indirect_stderr;
     Image total;               // interior + boundary
     Image total_stderr;        // combined standard error (the estimators are independent)
 };

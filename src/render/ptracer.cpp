@@ -8,6 +8,7 @@
 // | hide_emitters  | boolean | false   | do not show directly visible emitters                      |
 #include "render/ptracer.h"
 
+#include "render/adjoint_shading.h"
 #include "render/film_footprint.h"
 
 #include <tbb/parallel_for.h>
@@ -26,19 +27,6 @@ ParticleTracer::ParticleTracer(const Properties& props) {
     if (max_depth_ < -1) props.raise("max_depth", "must be -1 (infinite) or non-negative");
     if (rr_depth_ <= 0) props.raise("rr_depth", "must be positive");
 }
-
-namespace {
-
-// Shading-normal correction of the adjoint BSDF (Veach 1997, Eq. 5.17): |w_prev·n_s||w_next·n_g| / (|w_prev·n_g||w_next·n_s|),
-// applied on top of eval()'s |w_next·n_s| factor. w_prev points toward the light, w_next toward the camera side.
-float adjoint_shading_correction(const SurfaceInteraction3f& si, const Vec3f& w_next_world) {
-    const Vec3f w_prev = si.to_world(si.wi);
-    const float denom = std::abs(dot(w_prev, si.n)) * std::abs(dot(w_next_world, si.sh_frame.n));
-    if (denom == 0.f) return 0.f;
-    return std::abs(dot(w_prev, si.sh_frame.n)) * std::abs(dot(w_next_world, si.n)) / denom;
-}
-
-} // namespace
 
 void ParticleTracer::trace(const Scene& scene, Sampler& sampler, Image& image, RayCounter& rays) const {
     const BSDFContext ctx{TransportMode::Importance};

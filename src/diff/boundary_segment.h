@@ -1,0 +1,71 @@
+// Boundary segments away from the camera (paper 001 §5.2, Eqs. 29–31): a segment x_S0 → x_D0 that grazes a
+// discontinuity edge at an interior point x_B. Seen from the source endpoint x_S0, the edge casts a
+// visibility discontinuity curve onto the receiver surface of x_D0; the boundary term integrates, along that
+// curve, the jump of the path contribution (its lit-side value, Eq. 21) times the curve's normal velocity
+// relative to the receiver's material point (Eqs. 47–50).
+//
+// The estimators sample an edge point x_B by length and a source point (an emitter sample, or the first
+// surface behind x_B along a sampled direction), extend x_S0 → x_B to the receiver, and convert the measure
+// of the curve with dℓ(x_D0) = stretch · dℓ(x_B) (the ratio in Eq. 40).
+#pragma once
+#include "core/distribution.h"
+#include "diff/edges.h"
+#include "diff/material_form.h"
+#include "render/integrator.h"
+
+namespace penumbra {
+
+// Every discontinuity edge of the scene, sampled by length.
+struct SceneEdges {
+    struct SceneEdge {
+        const Shape* shape;
+        Edge edge;
+        bool closed; // the edge's mesh has no boundary edges (a solid: concave edges never graze a line)
+    };
+    std::vector<SceneEdge> edges;
+    DiscreteDistribution by_length;
+    float total_length = 0.f;
+
+    explicit SceneEdges(const Scene& scene);
+    bool empty() const { return edges.empty(); }
+};
+
+// A point on an edge, drawn with density 1 / total_length (per unit length).
+struct EdgePoint {
+    const SceneEdges::SceneEdge* edge;
+    float tau;      // position along the edge, in [0, 1]
+    Vec3f a, b, p;  // the edge's endpoints and the point
+};
+EdgePoint sample_edge_point(const SceneEdges& edges, float u);
+
+// Whether the line through the edge with direction d grazes the mesh there (it is a discontinuity of the
+// visibility of that line): a boundary edge, or a convex edge with one face turned toward d and one away;
+// edges of open meshes are tested with the faces' directions away from the edge instead (a fold of a sheet).
+bool grazes(const SceneEdges::SceneEdge& edge, const Vec3f& d);
+
+// The source endpoint x_S0: a point with its surface normal (zero for point lights) and, when it lies on a
+// shape, its material point (which moves with the shape).
+struct SegmentSource {
+    Vec3f p;
+    Vec3f n;
+    const Shape* shape = nullptr;
+    uint32_t prim = 0;
+    Vec2f bary;
+};
+
+struct BoundarySegment {
+    bool valid = false;
+    SurfaceInteraction3f receiver; // x_D0, with wi pointing toward the source
+    float stretch = 0.f;           // dℓ(x_D0) / dℓ(x_B)
+    float cos_receiver = 0.f;      // |n(x_D0) · ω| for the segment's direction ω
+    Var velocity;                  // (x_D0(θ) − receiver material point(θ)) · n_dark: its derivative is the
+                                   // curve's normal velocity, n_dark pointing into the occluded side
+};
+
+// Extends source → x_B beyond the edge to the receiver x_D0. Invalid when the edge does not graze the line,
+// the segment source → x_B is blocked, nothing (or no BSDF) lies beyond, or the two sides of the curve do not
+// differ in visibility. Records the velocity on the thread's tape.
+BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& form, const SegmentSource& source,
+                                       const EdgePoint& x_b, RayCounter& rays);
+
+} // namespace penumbra

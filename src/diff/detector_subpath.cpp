@@ -1,0 +1,65 @@
+#include "diff/detector_subpath.h"
+
+#include "render/adjoint_shading.h"
+
+namespace penumbra {
+
+namespace {
+
+// The camera's importance at `si` in film measure, times the adjoint BSDF toward the camera.
+bool connect_to_camera(const Scene& scene, const SurfaceInteraction3f& si, CameraConnection& out, RayCounter& rays) {
+    const Sensor& sensor = *scene.sensor;
+    float jacobian;
+    if (!sensor.film_position(si.p, si.n, out.s, jacobian)) return false;
+    if (!(out.s.x >= 0.f && out.s.y >= 0.f && out.s.x <= sensor.film->width && out.s.y <= sensor.film->height))
+        return false;
+    const Vec3f to_cam = sensor.to_sensor(si.p);
+    const float cos_cam = std::abs(dot(si.n, to_cam));
+    if (!(cos_cam > 0.f)) return false;
+    ++rays.rays;
+    const Ray cam_ray = sensor.plugin == "orthographic" ? si.spawn_ray(to_cam)
+                                                        : si.spawn_ray_to(sensor.to_world.apply_point(Vec3f(0.f)));
+    if (scene.occluded(cam_ray)) return false;
+    const Color3f f = si.bsdf()->eval(BSDFContext{TransportMode::Importance}, si, si.to_local(to_cam)) *
+                      adjoint_shading_correction(si, to_cam);
+    out.weight = f * (jacobian / cos_cam);
+    return !is_black(out.weight);
+}
+
+} // namespace
+
+void detector_connections(const Scene& scene, const SurfaceInteraction3f& x_d0, int t_min, int t_max,
+                          const PathSettings& settings, Sampler& sampler, RayCounter& rays, DetectorConnections& out) {
+    const BSDFContext ctx{TransportMode::Importance};
+    SurfaceInteraction3f si = x_d0;
+    Color3f throughput(1.f);
+    for (int t = 0; t_max < 0 || t <= t_max; ++t) {
+        const BSDF* bsdf = si.bsdf();
+        if (!bsdf) return;
+        if (t >= t_min && bsdf->has(BSDFSmooth)) {
+            CameraConnection c;
+            if (connect_to_camera(scene, si, c, rays)) {
+                c.weight *= throughput;
+                c.t = t;
+                out.items[out.count++] = c;
+                if (out.count == DetectorConnections::Capacity) return;
+            }
+        }
+        if (t == t_max) return;
+        const float u1 = sampler.next_1d();
+        const auto [bs, weight] = bsdf->sample(ctx, si, u1, sampler.next_2d());
+        if (is_black(weight)) return;
+        const Vec3f d = si.to_world(bs.wo);
+        throughput *= weight * adjoint_shading_correction(si, d);
+        ++rays.rays;
+        si = scene.intersect(si.spawn_ray(d));
+        if (!si.is_valid()) return;
+        if (t + 1 >= settings.rr_depth) {
+            const float q = std::min(max_component(throughput), 0.95f);
+            if (sampler.next_1d() >= q) return;
+            throughput /= q;
+        }
+    }
+}
+
+} // namespace penumbra

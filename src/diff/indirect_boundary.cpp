@@ -1,0 +1,116 @@
+#include "diff/indirect_boundary.h"
+
+#include "core/warp.h"
+#include "diff/detector_subpath.h"
+#include "diff/direct_boundary.h"
+
+namespace penumbra {
+
+namespace {
+
+constexpr uint64_t EmitterSalt = 0xD1B54A32D192ED03ULL, DirectionalSalt = 0x8CB92BA72F3D8DD7ULL;
+
+// Deepest detector vertex for a boundary segment whose source subpath has at least `source_segments` segments
+// (-1: unbounded): the whole path camera → x_Dt … x_D0 → x_S0 → … has t + 2 + source_segments − 1 segments.
+int max_detector_depth(const PathSettings& settings, int source_segments) {
+    return settings.max_depth < 0 ? -1 : settings.max_depth - 1 - source_segments;
+}
+
+// Radiance x_S0 reflects toward x_D0 (its emission excluded), by path tracing from x_S0 with at most
+// `max_depth` segments counting x_D0 → x_S0 (-1: unbounded).
+Color3f reflected_radiance(const Scene& scene, const SurfaceInteraction3f& x_s0, const Vec3f& from, int max_depth,
+                           const PathSettings& settings, Sampler& sampler, RayCounter& rays) {
+    PathSettings source = settings;
+    source.max_depth = max_depth;
+    source.hide_emitters = true;
+    const Ray arriving(from, normalize(x_s0.p - from));
+    return trace_path<float>(scene, sampler, arriving, x_s0, x_s0, ReferenceGeometry{}, source, rays);
+}
+
+// Algorithm 1 of paper 001 for surfaces: one multi-directional boundary sample.
+BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, const MaterialForm& form,
+                                  const PathSettings& settings, Sampler& sampler, RayCounter& rays) {
+    BoundarySample out;
+    const int t_max = max_detector_depth(settings, 2);
+    if (settings.max_depth >= 0 && t_max < 0) return out;
+    const EdgePoint x_b = sample_edge_point(edges, sampler.next_1d());
+    const Vec3f w_b = warp::square_to_uniform_sphere(sampler.next_2d());
+    if (!grazes(*x_b.edge, w_b)) return out;
+
+    // x_S0: the first surface behind x_B along −ω_B.
+    ++rays.rays;
+    SurfaceInteraction3f x_s0 = scene.intersect(Ray(x_b.p - w_b * ray_offset_scale(x_b.p), w_b * -1.f));
+    if (!x_s0.is_valid() || !x_s0.bsdf() || !x_s0.bsdf()->has(BSDFSmooth)) return out;
+    const SegmentSource source{x_s0.p, x_s0.n, x_s0.shape, x_s0.prim_index, x_s0.bary};
+    const BoundarySegment seg = trace_boundary_segment(scene, form, source, x_b, rays);
+    if (!seg.valid) return out;
+
+    DetectorConnections connections;
+    detector_connections(scene, seg.receiver, 0, t_max, settings, sampler, rays, connections);
+    if (connections.count == 0) return out;
+
+    // G(x_S0, x_D0) times the Jacobian of Eq. 40 over the density of (x_B, ω_B):
+    //   |cos φ_S| |cos φ_D| / r² · r_S² / |cos φ_S| · stretch = |cos φ_D| r_S² stretch / r².
+    const float r_s2 = squared_norm(x_b.p - x_s0.p), r2 = squared_norm(seg.receiver.p - x_s0.p);
+    const float factor =
+        seg.cos_receiver * r_s2 * seg.stretch / r2 * edges.total_length / warp::square_to_uniform_sphere_pdf();
+
+    // The source subpath: one estimate per path-length budget the connections need (all from the same
+    // random numbers; each is unbiased for its budget).
+    Color3f radiance(0.f);
+    int budget_of_radiance = -2;
+    const Sampler source_start = sampler;
+    for (int k = 0; k < connections.count; ++k) {
+        const CameraConnection& c = connections.items[k];
+        const int budget = settings.max_depth < 0 ? -1 : settings.max_depth - (c.t + 1);
+        if (budget != budget_of_radiance) {
+            sampler = source_start;
+            radiance = reflected_radiance(scene, x_s0, seg.receiver.p, budget, settings, sampler, rays);
+            budget_of_radiance = budget;
+        }
+        if (!is_black(radiance)) out.add_splat(c.s, radiance * c.weight * factor);
+    }
+    out.velocity = seg.velocity;
+    return out;
+}
+
+} // namespace
+
+IndirectBoundary::IndirectBoundary(const Scene& scene) : scene_(scene), edges_(std::make_unique<SceneEdges>(scene)) {}
+IndirectBoundary::~IndirectBoundary() = default;
+
+Image IndirectBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
+    const Film& film = *scene_.sensor->film;
+    Image result(film.width, film.height);
+    if (edges_->empty()) return result;
+    const MaterialForm form(params);
+    const int t_max = max_detector_depth(options.path, 1);
+    if (!scene_.emitters.empty() && (t_max < 0 || t_max >= 1)) {
+        result = boundary_derivative(scene_, params, options, EmitterSalt, [&](Sampler& sampler, RayCounter& rays) {
+            return sample_emitter_boundary(scene_, *edges_, form, 1, t_max, options.path, sampler, rays);
+        });
+    }
+    const Image directional =
+        boundary_derivative(scene_, params, options, DirectionalSalt, [&](Sampler& sampler, RayCounter& rays) {
+            return sample_directional(scene_, *edges_, form, options.path, sampler, rays);
+        });
+    for (size_t i = 0; i < result.pixels.size(); ++i) result.pixels[i] += directional.pixels[i];
+    return result;
+}
+
+void IndirectBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
+                                std::vector<double>& gradient) const {
+    if (edges_->empty()) return;
+    const MaterialForm form(params);
+    const int t_max = max_detector_depth(options.path, 1);
+    if (!scene_.emitters.empty() && (t_max < 0 || t_max >= 1)) {
+        boundary_gradient(scene_, adjoint, options, EmitterSalt, [&](Sampler& sampler, RayCounter& rays) {
+            return sample_emitter_boundary(scene_, *edges_, form, 1, t_max, options.path, sampler, rays);
+        }, gradient);
+    }
+    boundary_gradient(scene_, adjoint, options, DirectionalSalt, [&](Sampler& sampler, RayCounter& rays) {
+        return sample_directional(scene_, *edges_, form, options.path, sampler, rays);
+    }, gradient);
+}
+
+} // namespace penumbra
