@@ -4,6 +4,7 @@
 #include "core/colormap.h"
 #include "diff/finite_difference.h"
 #include "diff/interior.h"
+#include "diff/path_sampling.h"
 #include "diff/psdr.h"
 #include "scene/scene.h"
 
@@ -27,6 +28,12 @@ struct Common {
     uint64_t seed = 0;
     std::string output, stderr_output, terms_prefix;
     bool quiet = false;
+    // --method paths (paper 002)
+    std::string sampling = "differential";
+    float q = 0.5f;
+    bool no_nee = false, adaptive = false;
+    double defensive = 0.05, primal_fraction = 0.75;
+    std::string adjoint, target, loss = "l2";
 };
 
 void add_common(CLI::App* cmd, Common& c, bool needs_params) {
@@ -42,9 +49,40 @@ void add_common(CLI::App* cmd, Common& c, bool needs_params) {
 }
 
 void add_method(CLI::App* cmd, Common& c) {
-    cmd->add_option("--method", c.method, "interior (material-form interior term only) or psdr (interior + boundary)")
-        ->check(CLI::IsMember({"interior", "psdr"}));
+    cmd->add_option("--method", c.method,
+                    "interior (material-form interior term only), psdr (interior + boundary) or paths (path sampling "
+                    "methods of paper 002, non-geometric parameters only)")
+        ->check(CLI::IsMember({"interior", "psdr", "paths"}));
     cmd->add_option("--boundary-spp", c.boundary_spp, "samples per pixel of each boundary term")->check(CLI::NonNegativeNumber);
+    cmd->add_option("--sampling", c.sampling, "--method paths: differential (differential vertex sampling) or bsdf")
+        ->check(CLI::IsMember({"differential", "bsdf"}));
+    cmd->add_option("--q", c.q, "--method paths: probability that a vertex becomes the differential vertex (default 0.5)")
+        ->check(CLI::Range(0.0, 0.999));
+    cmd->add_flag("--no-nee", c.no_nee, "--method paths: no next-event estimation");
+    cmd->add_flag("--adaptive", c.adaptive, "--method paths: adaptive pixel sampling by |adjoint| (needs --adjoint or --target)");
+    cmd->add_option("--defensive", c.defensive, "--method paths: uniform share of the adaptive pixel density (default 0.05)")
+        ->check(CLI::Range(0.0, 1.0));
+}
+
+// --method paths: the options of diff/path_sampling.h from the command line.
+PathSamplingOptions path_sampling_options(const Scene& scene, const Common& c, int batches) {
+    PathSamplingOptions o;
+    o.batches = batches;
+    o.spp = c.spp / batches;
+    o.seed = c.seed;
+    o.threads = c.threads;
+    o.path = path_settings(scene);
+    o.differential = c.sampling == "differential";
+    o.q = c.q;
+    o.nee = !c.no_nee;
+    o.adaptive = c.adaptive;
+    o.defensive = c.defensive;
+    o.primal_fraction = c.primal_fraction;
+    return o;
+}
+
+std::string path_sampling_name(const Common& c) {
+    return c.sampling + " sampling" + (c.no_nee ? "" : " + NEE") + (c.adaptive ? " + adaptive pixels" : "");
 }
 
 // The terms' budgets from the command line (the sample count is split over the batches).
@@ -58,6 +96,7 @@ PsdrOptions psdr_options(const Scene& scene, const Common& c, int batches, bool 
     o.interior.path = path_settings(scene);
     o.primary_spp = c.method == "psdr" && c.boundary_spp > 0 ? std::max(1, c.boundary_spp / batches) : 0;
     o.direct_spp = o.primary_spp;
+    o.indirect_spp = o.primary_spp;
     return o;
 }
 
@@ -105,11 +144,28 @@ void cmd_params(const Common& c) {
     }
 }
 
+// `derivative --method paths`: forward mode of the path sampling estimator.
+void cmd_derivative_paths(const Common& c, Scene& scene, Parameters& params) {
+    if (c.adaptive && c.adjoint.empty()) throw Error("--adaptive needs --adjoint (the pixel importance |∂L/∂I|)");
+    const Image adjoint = c.adjoint.empty() ? Image() : read_image(c.adjoint, false);
+    PathSamplingOptions o = path_sampling_options(scene, c, batches_for(c));
+    ProgressBar bar(!c.quiet, "derivative");
+    o.progress = bar.callback();
+    const DerivativeImage d = path_sampling_derivative(scene, params, o, adjoint);
+    write_signed(c.output, d.derivative);
+    if (!c.stderr_output.empty()) write_image(c.stderr_output, d.stderr_img);
+    const Film& film = *scene.sensor->film;
+    std::fprintf(stderr, "derivative (path sampling: %s) %dx%d at %d spp in %.2f s, mean %.6g -> %s\n",
+                 path_sampling_name(c).c_str(), film.width, film.height, o.spp * o.batches, d.seconds,
+                 image_mean(d.derivative), c.output.c_str());
+}
+
 void cmd_derivative(const Common& c, bool no_antithetic) {
     check_output(c.output);
     auto scene = load_scene(c.scene, parse_defines(c.defines));
     Parameters params(*scene);
     params.enable(selection(c.params));
+    if (c.method == "paths") return cmd_derivative_paths(c, *scene, params);
     PsdrOptions o = psdr_options(*scene, c, batches_for(c), !no_antithetic);
     ProgressBar bar(!c.quiet, "derivative");
     o.interior.progress = bar.callback();
@@ -123,10 +179,11 @@ void cmd_derivative(const Common& c, bool no_antithetic) {
         write_signed(c.terms_prefix + "_interior" + lower_extension(c.output), d.interior.derivative);
         if (total) write_signed(c.terms_prefix + "_primary" + lower_extension(c.output), d.primary);
         if (total) write_signed(c.terms_prefix + "_direct" + lower_extension(c.output), d.direct);
+        if (total) write_signed(c.terms_prefix + "_indirect" + lower_extension(c.output), d.indirect);
     }
     const Film& film = *scene->sensor->film;
     std::fprintf(stderr, "derivative (%s) %dx%d at %d spp%s in %.2f s, mean %.6g -> %s\n",
-                 total ? "interior + primary and direct boundary" : "interior term", film.width, film.height,
+                 total ? "interior + primary, direct and indirect boundary" : "interior term", film.width, film.height,
                  o.interior.spp * o.interior.batches,
                  total ? (", " + std::to_string(o.primary_spp * o.interior.batches) + " boundary spp").c_str() : "",
                  seconds, image_mean(total ? d.total : d.interior.derivative), c.output.c_str());
@@ -151,17 +208,41 @@ void cmd_fd(const Common& c, double eps) {
                  o.spp * batches, fd.seconds, image_mean(fd.derivative), c.output.c_str());
 }
 
-void cmd_gradient(const Common& c, const std::string& adjoint_path) {
+// `gradient --method paths`: PRB passes 2-3 given an adjoint image, or all three passes given a target image.
+Gradient gradient_paths(const Common& c, const Scene& scene, const Parameters& params, nlohmann::json& out) {
+    PathSamplingOptions o = path_sampling_options(scene, c, 1);
+    ProgressBar bar(!c.quiet, "gradient");
+    o.progress = bar.callback();
+    out["method"] = "paths: " + path_sampling_name(c);
+    if (!c.target.empty()) {
+        const LossGradient l = path_sampling_loss_gradient(scene, params, read_image(c.target, false), parse_loss_kind(c.loss), o);
+        out["loss"] = l.loss;
+        out["seconds_primal"] = l.seconds_primal;
+        std::fprintf(stderr, "loss (%s) of the pass-1 image: %.6g\n", c.loss.c_str(), l.loss);
+        return {l.values, l.primal, l.seconds};
+    }
+    const SampledGradient g = path_sampling_gradient(scene, params, read_image(c.adjoint, false), o);
+    return {g.values, g.primal, g.seconds};
+}
+
+void cmd_gradient(const Common& c) {
+    if (c.adjoint.empty() == c.target.empty()) throw Error("gradient: give exactly one of --adjoint and --target");
+    if (!c.target.empty() && c.method != "paths") throw Error("gradient: --target needs --method paths");
+    if (c.adaptive && c.method != "paths") throw Error("gradient: --adaptive needs --method paths");
     auto scene = load_scene(c.scene, parse_defines(c.defines));
     Parameters params(*scene);
     if (c.params.empty()) params.enable_all_data();
     else params.enable(selection(c.params));
-    const Image adjoint = read_image(adjoint_path, false);
-    PsdrOptions o = psdr_options(*scene, c, 1, true);
-    ProgressBar bar(!c.quiet, "gradient");
-    o.interior.progress = bar.callback();
-    const Gradient g = psdr_gradient(*scene, params, adjoint, o);
     nlohmann::json out;
+    Gradient g;
+    if (c.method == "paths") {
+        g = gradient_paths(c, *scene, params, out);
+    } else {
+        PsdrOptions o = psdr_options(*scene, c, 1, true);
+        ProgressBar bar(!c.quiet, "gradient");
+        o.interior.progress = bar.callback();
+        g = psdr_gradient(*scene, params, read_image(c.adjoint, false), o);
+    }
     out["seconds"] = g.seconds;
     out["spp"] = c.spp;
     for (const auto& [p, index] : params.enabled()) {
@@ -214,6 +295,7 @@ void add_diff_commands(CLI::App& app) {
     d->add_option("--batches", deriv->batches, "independent batches for --stderr (default 8)")->check(CLI::PositiveNumber);
     d->add_flag("--no-antithetic", *no_antithetic, "disable pixel-level antithetic sampling");
     d->add_option("--terms", deriv->terms_prefix, "also write each term's image as PREFIX_interior / _primary / _direct");
+    d->add_option("--adjoint", deriv->adjoint, "--method paths --adaptive: adjoint image ∂L/∂I giving the pixel importance");
     add_method(d, *deriv);
     d->callback([deriv, no_antithetic] { cmd_derivative(*deriv, *no_antithetic); });
 
@@ -228,13 +310,19 @@ void add_diff_commands(CLI::App& app) {
     f->callback([fd, eps] { cmd_fd(*fd, *eps); });
 
     auto grad = std::make_shared<Common>();
-    auto adjoint = std::make_shared<std::string>();
-    auto* g = app.add_subcommand("gradient", "reverse mode: dL/dθ for all parameters given an adjoint image ∂L/∂I");
+    auto* g = app.add_subcommand("gradient", "reverse mode: dL/dθ for all parameters given an adjoint image ∂L/∂I "
+                                             "(or, with --method paths, a target image and a loss)");
     add_common(g, *grad, false);
-    g->add_option("--adjoint", *adjoint, "adjoint image ∂L/∂I (.exr, the film's size)")->required();
+    g->add_option("--adjoint", grad->adjoint, "adjoint image ∂L/∂I (.exr, the film's size)");
+    g->add_option("--target", grad->target,
+                  "--method paths: target image; a primal pass (its own samples) gives the loss and its adjoint");
+    g->add_option("--loss", grad->loss, "loss for --target: l2 or rel_l2")->check(CLI::IsMember({"l2", "rel_l2"}));
+    g->add_option("--primal-fraction", grad->primal_fraction,
+                  "share of --spp spent on the primal pass with --target (default 0.75, the paper's 3:1)")
+        ->check(CLI::Range(0.01, 0.99));
     g->add_option("-o,--output", grad->output, "gradient as JSON");
     add_method(g, *grad);
-    g->callback([grad, adjoint] { cmd_gradient(*grad, *adjoint); });
+    g->callback([grad] { cmd_gradient(*grad); });
 
     auto cmp = std::make_shared<std::array<std::string, 4>>();
     auto* c = app.add_subcommand("compare", "relerr and z-scores of a derivative image against a reference");

@@ -4,6 +4,7 @@
 #pragma once
 #include "core/frame.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace penumbra {
@@ -160,6 +161,70 @@ private:
             b -= value / deriv;
         }
         return {erfinv(float(b)), erfinv(float(2.0 * std::max(double(u.y), 1e-6) - 1.0))};
+    }
+};
+
+// Differential microfacet sampling (paper 002 §4.1, after Zeltner et al. 2021): the positivization of
+// ∂D/∂α(m) cos θ_m for an isotropic roughness α. With s = tan²θ_m / α², the derivative changes sign at s = 1
+// (negative below for both distributions) and each part carries the same mass, so each is normalized on its
+// own (densities in s, Beckmann: e |1 − s| e^{−s}; GGX: 4 |s − 1| / (1 + s)³) and sampled by inverting its
+// CDF: in closed form for GGX, by the two branches of the Lambert W function (Newton iterations) for
+// Beckmann. Sampling-only (float): the derivative itself always comes from D() with Var.
+struct DifferentialNDF {
+    MicrofacetType type = MicrofacetType::Beckmann;
+    float alpha = 0.1f;
+
+    // A microfacet normal from the positive (sign > 0: s >= 1) or negative (sign < 0: s <= 1) part.
+    Vec3f sample(int sign, const Vec2f& u) const {
+        const double xi = std::min(double(u.x), 1.0 - 1e-7);
+        double s;
+        if (type == MicrofacetType::GGX) {
+            // CDF−(s) = 4s/(1+s)², CDF+(s) = (2y − 1)² with y = 1/(1+s).
+            const double y = sign < 0 ? 0.5 * (1.0 + std::sqrt(1.0 - xi)) : 0.5 * (1.0 - std::sqrt(xi));
+            s = (1.0 - y) / y;
+        } else {
+            // CDF−(s) = e s e^{−s} (s <= 1), CDF+(s) = 1 − e s e^{−s} (s >= 1): solve s e^{−s} = c.
+            constexpr double inv_e = 0.36787944117144233;
+            s = solve_s_exp_minus_s(sign < 0 ? xi * inv_e : (1.0 - xi) * inv_e, sign > 0);
+        }
+        const double tan2 = double(alpha) * alpha * s;
+        const double cos_theta = 1.0 / std::sqrt(1.0 + tan2);
+        const double sin_theta = std::sqrt(std::max(0.0, 1.0 - cos_theta * cos_theta));
+        const double phi = 2.0 * Pi * u.y;
+        return {float(sin_theta * std::cos(phi)), float(sin_theta * std::sin(phi)), float(cos_theta)};
+    }
+
+    // Solid-angle density of sample(sign, ·) at m: p_s(s) / (π α² cos³θ_m).
+    float pdf(int sign, const Vec3f& m) const {
+        if (!(m.z > 0.f)) return 0.f;
+        const double c2 = double(m.z) * m.z;
+        const double s = std::max(0.0, 1.0 - c2) / (c2 * alpha * alpha);
+        if ((sign < 0 && s > 1.0) || (sign > 0 && s < 1.0)) return 0.f;
+        const double p_s = type == MicrofacetType::GGX ? 4.0 * std::abs(s - 1.0) / ((1.0 + s) * (1.0 + s) * (1.0 + s))
+                                                       : 2.718281828459045 * std::abs(1.0 - s) * std::exp(-s);
+        return float(p_s / (Pi * double(alpha) * alpha * c2 * m.z));
+    }
+
+private:
+    // The root of s e^{−s} = c (0 <= c <= 1/e) on [0, 1] (−W₀(−c)) or on [1, ∞) (−W₋₁(−c)): Newton's method on
+    // log s − s − log c, safeguarded by bisection.
+    static double solve_s_exp_minus_s(double c, bool upper) {
+        if (c <= 0.0) return upper ? 1e30 : 0.0;
+        c = std::min(c, 0.36787944117144233);
+        const double log_c = std::log(c);
+        double lo = upper ? 1.0 : 0.0, hi = upper ? 2.0 - 2.0 * log_c : 1.0;
+        double s = upper ? std::max(1.0, -log_c + std::log(std::max(1.0, -log_c))) : c * (1.0 + c);
+        for (int it = 0; it < 100; ++it) {
+            const double g = std::log(s) - s - log_c; // increasing on (0, 1), decreasing on (1, ∞)
+            if ((g < 0.0) != upper) lo = s;
+            else hi = s;
+            const double dg = 1.0 / s - 1.0;
+            double next = s - g / dg;
+            if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+            if (std::abs(next - s) <= 1e-13 * std::max(1.0, s)) return next;
+            s = next;
+        }
+        return s;
     }
 };
 

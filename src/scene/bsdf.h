@@ -59,11 +59,43 @@ public:
 #undef PENUMBRA_BSDF_METHODS
     // Diffuse reflectance (the `albedo` AOV); zero for non-diffuse materials.
     virtual Color3f eval_diffuse_reflectance(const SurfaceInteraction3f&) const { return Color3f(0.f); }
+
+    // Differential BSDF sampling (paper 002 §4.1): densities for the positive (sign = +1) and negative (sign = -1)
+    // parts of ∂(f cos)/∂θ for one parameter θ of this BSDF (single-signed decompositions, Belhe et al. 2024).
+    // Each signed density is normalized over the sphere (samples that leave the valid hemisphere fail: weight
+    // and pdf 0). They are sampling-only approximations of the derivative; its value always comes from eval()
+    // with Var. has_differential_lobe() tells whether the lobe's parameter is enabled for differentiation at si
+    // (it evaluates the parameter as Var: it may record nodes on the current thread's tape). BSDFs without a
+    // lobe keep the defaults; the estimators then use BSDF sampling at that vertex.
+    virtual bool has_differential_lobe(const SurfaceInteraction3f&) const { return false; }
+    virtual BSDFSample sample_differential(const BSDFContext&, const SurfaceInteraction3f&, int /*sign*/, float /*sample1*/,
+                                           const Vec2f& /*sample2*/) const {
+        return {};
+    }
+    virtual float pdf_differential(const BSDFContext&, const SurfaceInteraction3f&, int /*sign*/, const Vec3f& /*wo*/) const {
+        return 0.f;
+    }
     // Opacity of `mask`-like BSDFs is handled through Null sampling; nothing else is special.
 
 protected:
     uint32_t flags_ = 0;
 };
+
+// The float interaction as Var constants: lets a BSDF evaluate one of its textures as Var to see whether it
+// depends on an enabled parameter (has_differential_lobe()).
+inline SurfaceInteraction<Var> constant_interaction(const SurfaceInteraction3f& si) {
+    SurfaceInteraction<Var> v;
+    v.t = Var(si.t);
+    v.p = Vec3<Var>(si.p);
+    v.n = Vec3<Var>(si.n);
+    v.sh_frame = Frame<Var>(Vec3<Var>(si.sh_frame.s), Vec3<Var>(si.sh_frame.t), Vec3<Var>(si.sh_frame.n));
+    v.uv = Vec2<Var>(Var(si.uv.x), Var(si.uv.y));
+    v.wi = Vec3<Var>(si.wi);
+    v.bary = si.bary;
+    v.shape = si.shape;
+    v.prim_index = si.prim_index;
+    return v;
+}
 
 // CRTP helper: a BSDF implements `template <typename T> Color3<T> eval_t(ctx, si, wo) const` and `pdf_t`.
 template <typename Derived> class BSDFBase : public BSDF {

@@ -43,6 +43,32 @@ public:
         return bsdf_[0]->eval_diffuse_reflectance(si) * (1.f - w) + bsdf_[1]->eval_diffuse_reflectance(si) * w;
     }
 
+    // Differential lobes (paper 002 §4.1). Which parameter drives the lobe at si, in this order: the weight,
+    // when it is enabled and both children are smooth: ∂f/∂w = f_1 − f_0, so the positive part is sampled from
+    // child 1 and the negative part from child 0 (each sign chosen with probability 1/2 by the caller, so that
+    // p_∂f = (p_0 + p_1) / 2); otherwise the lobe of the first child that has one for an enabled parameter
+    // (∂f/∂θ = w ∂f_i/∂θ). Without any enabled parameter the weight lobe is used (for sampling tests).
+    bool has_differential_lobe(const SurfaceInteraction3f& si) const override { return lobe(si, true) != Lobe::None; }
+    BSDFSample sample_differential(const BSDFContext& ctx, const SurfaceInteraction3f& si, int sign, float u1,
+                                   const Vec2f& u2) const override {
+        const Lobe l = lobe(si, false);
+        if (l == Lobe::Child0 || l == Lobe::Child1)
+            return bsdf_[l == Lobe::Child1 ? 1 : 0]->sample_differential(ctx, si, sign, u1, u2);
+        if (l == Lobe::None) return {};
+        const BSDF& child = *bsdf_[sign > 0 ? 1 : 0];
+        BSDFSample bs = child.sample(ctx, si, u1, u2).first;
+        if (bs.pdf == 0.f || (bs.sampled_type & BSDFDelta)) return {};
+        bs.pdf = child.pdf(ctx, si, bs.wo);
+        return bs;
+    }
+    float pdf_differential(const BSDFContext& ctx, const SurfaceInteraction3f& si, int sign, const Vec3f& wo) const override {
+        const Lobe l = lobe(si, false);
+        if (l == Lobe::Child0 || l == Lobe::Child1)
+            return bsdf_[l == Lobe::Child1 ? 1 : 0]->pdf_differential(ctx, si, sign, wo);
+        if (l == Lobe::None) return 0.f;
+        return bsdf_[sign > 0 ? 1 : 0]->pdf(ctx, si, wo);
+    }
+
     void traverse(ParamVisitor& v) override {
         v.put_object("weight", weight_.get());
         v.put_object("bsdf_0", bsdf_[0].get());
@@ -51,6 +77,16 @@ public:
 
 private:
     template <typename T> T weight(const SurfaceInteraction<T>& si) const { return clamp(weight_->eval_1(si), 0.f, 1.f); }
+    enum class Lobe { None, Weight, Child0, Child1 };
+    // `enabled_only`: None unless the lobe's parameter is enabled; otherwise fall back to the weight lobe.
+    Lobe lobe(const SurfaceInteraction3f& si, bool enabled_only) const {
+        const bool smooth = !bsdf_[0]->has(BSDFDelta) && !bsdf_[1]->has(BSDFDelta);
+        const bool weight_enabled = !weight_->eval_1(constant_interaction(si)).is_constant();
+        if (weight_enabled) return smooth ? Lobe::Weight : Lobe::None;
+        if (bsdf_[0]->has_differential_lobe(si)) return Lobe::Child0;
+        if (bsdf_[1]->has_differential_lobe(si)) return Lobe::Child1;
+        return enabled_only || !smooth ? Lobe::None : Lobe::Weight;
+    }
     TexturePtr weight_;
     BSDFPtr bsdf_[2];
 };

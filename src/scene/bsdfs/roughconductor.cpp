@@ -51,6 +51,29 @@ public:
         return {bs, eval_t<float>(ctx, si, bs.wo) / bs.pdf};
     }
 
+    // Differential lobe of the isotropic roughness α (paper 002 §4.1): the positivized ∂D/∂α cos θ_m of
+    // DifferentialNDF, reflected about the sampled normal. Anisotropic roughness has no lobe.
+    bool has_differential_lobe(const SurfaceInteraction3f& si) const override {
+        return rough_.alpha_u == rough_.alpha_v && !rough_.alpha_u->eval_1(constant_interaction(si)).is_constant();
+    }
+    BSDFSample sample_differential(const BSDFContext& ctx, const SurfaceInteraction3f& si, int sign, float,
+                                   const Vec2f& u) const override {
+        BSDFSample bs;
+        if (!(si.wi.z > 0.f)) return bs;
+        bs.wo = reflect(si.wi, differential_distribution(si).sample(sign, u));
+        bs.sampled_type = BSDFGlossyReflection;
+        bs.pdf = pdf_differential(ctx, si, sign, bs.wo);
+        return bs;
+    }
+    // Density of reflect(wi, m) for m ~ the signed lobe: p_m(m) / (4 wo.m).
+    float pdf_differential(const BSDFContext&, const SurfaceInteraction3f& si, int sign, const Vec3f& wo) const override {
+        if (!(si.wi.z > 0.f && wo.z > 0.f)) return 0.f;
+        const Vec3f h = normalize(si.wi + wo);
+        const float d = dot(wo, h);
+        if (!(d > 0.f)) return 0.f;
+        return differential_distribution(si).pdf(sign, h) / (4.f * d);
+    }
+
     void traverse(ParamVisitor& v) override {
         traverse_roughness(v, rough_);
         v.put_object("eta", eta_.get());
@@ -66,6 +89,9 @@ private:
         d.alpha_v = rough_.alpha_v->eval_1(si);
         d.sample_visible = rough_.sample_visible;
         return d;
+    }
+    DifferentialNDF differential_distribution(const SurfaceInteraction3f& si) const {
+        return {rough_.type, rough_.alpha_u->eval_1(si)};
     }
     RoughnessParams rough_;
     TexturePtr eta_, k_, specular_;
