@@ -23,21 +23,29 @@ std::string format_values(const std::vector<double>& v) {
 
 void print_summary(const OptimizeConfig& config, const OptimizeResult& result) {
     const double loss = result.history.empty() ? NAN : result.history.back().loss;
-    std::fprintf(stderr, "%d iterations in %.1f s (%.2f s/iteration; target %.1f s); last loss %.4g -> %s\n",
-                 config.iterations, result.seconds,
+    std::fprintf(stderr,
+                 "%s: %d iterations in %.1f s (%.2f s/iteration; target %.1f s); last loss %.4g -> %s\n",
+                 result.psdr ? "psdr" : "interior", config.iterations, result.seconds,
                  config.iterations ? result.seconds / config.iterations : 0.0, result.target_seconds, loss,
                  config.output.c_str());
     for (const ParameterResult& p : result.parameters) {
         std::fprintf(stderr, "  %-28s %s -> %s", p.name.c_str(), format_values(p.initial).c_str(),
                      format_values(p.final).c_str());
-        if (!p.truth.empty())
+        if (!p.truth.empty() && std::isfinite(p.pose_error))
+            std::fprintf(stderr, "  (true %s, error %.4g%s)", format_values(p.truth).c_str(), p.pose_error,
+                         p.name.ends_with(".rotate") ? " degrees" : "");
+        else if (!p.truth.empty())
             std::fprintf(stderr, "  (true %s, relative error %.2f%%)", format_values(p.truth).c_str(),
                          100.0 * p.relative_error);
         std::fprintf(stderr, "\n");
     }
     if (std::isfinite(result.final_parameter_error))
-        std::fprintf(stderr, "parameter error (relative L2 over all parameters): %.2f%%\n",
+        std::fprintf(stderr, "parameter error (relative L2 over the material/emitter parameters): %.2f%%\n",
                      100.0 * result.final_parameter_error);
+    if (std::isfinite(result.final_translation_error))
+        std::fprintf(stderr, "translation error: %.4g scene units\n", result.final_translation_error);
+    if (std::isfinite(result.final_rotation_error))
+        std::fprintf(stderr, "rotation error: %.3g degrees\n", result.final_rotation_error);
 }
 
 } // namespace

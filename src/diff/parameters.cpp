@@ -145,8 +145,10 @@ void Parameters::enable(const std::vector<std::pair<std::string, std::vector<flo
     disable_all();
     std::set<std::string> names;
     for (const auto& [name, dir] : selection) {
-        if (!names.insert(name).second) throw Error("parameter '" + name + "' is selected twice");
         const Parameter& p = find(name);
+        // A motion may be selected several times (e.g. the three axes of a translation), each with its own θ.
+        if (p.kind == Parameter::Kind::Data && !names.insert(name).second)
+            throw Error("parameter '" + name + "' is selected twice");
         const int index = dimension_;
         enabled_.emplace_back(&p, index);
         dimension_ += p.size;

@@ -52,7 +52,9 @@ public:
     // Enables parameters for differentiation, each with a direction: `direction` has the parameter's size, or
     // 3 values broadcast over an array of 3-vectors (colors, vertex positions), or 1 value broadcast; for
     // translate it is the world vector, for rotate the world axis (empty: unit directions / +y axis).
-    // Indices are assigned contiguously in the given order. Disables everything enabled before.
+    // Indices are assigned contiguously in the given order. A motion may be selected several times, each
+    // selection with its own direction and scalar θ (a pose: translate along x, y, z and rotate about x, y, z);
+    // a Data parameter only once. Disables everything enabled before.
     void enable(const std::vector<std::pair<std::string, std::vector<float>>>& selection);
     // Reverse mode: every Data parameter, with no direction.
     void enable_all_data();

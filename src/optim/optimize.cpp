@@ -2,8 +2,6 @@
 
 #include "core/error.h"
 #include "core/plot.h"
-#include "diff/interior.h"
-#include "diff/parameters.h"
 #include "optim/adam.h"
 #include "render/render.h"
 
@@ -165,6 +163,23 @@ OptimizeConfig parse_optimize_config(const json& j, const std::string& base_dir,
     }
     target.finish();
 
+    const std::string method = root.string("method", "auto");
+    if (method == "auto")
+        c.method = OptimizeConfig::Method::Auto;
+    else if (method == "interior")
+        c.method = OptimizeConfig::Method::Interior;
+    else if (method == "psdr")
+        c.method = OptimizeConfig::Method::Psdr;
+    else
+        throw Error(source + ": key 'method': unknown method '" + method +
+                    "' (expected auto, interior or psdr)");
+    for (const char* key : {"primary_spp", "direct_spp", "indirect_spp"})
+        if (root.has(key) && c.method == OptimizeConfig::Method::Interior)
+            throw Error(source + ": key '" + key +
+                        "' is a boundary-term budget; method 'interior' has no boundary terms");
+    c.primary_spp = int(root.integer("primary_spp", c.primary_spp, 0));
+    c.direct_spp = int(root.integer("direct_spp", c.direct_spp, 0));
+    c.indirect_spp = int(root.integer("indirect_spp", c.indirect_spp, 0));
     c.loss = parse_loss_kind(root.string("loss", "l2"));
     c.iterations = int(root.integer("iterations", c.iterations, 0));
     c.spp = int(root.integer("spp", c.spp, 1));
@@ -203,15 +218,21 @@ uint64_t stream_seed(uint64_t seed, uint64_t stream) {
     return z ^ (z >> 31);
 }
 
-// A parameter's values from the config: its size, or 1 value broadcast.
-std::vector<double> expand(const std::string& name, const std::vector<float>& v, int size) {
-    if (int(v.size()) == size) return {v.begin(), v.end()};
-    if (v.size() == 1) return std::vector<double>(size_t(size), double(v[0]));
-    throw Error("parameter '" + name + "' has " + std::to_string(size) + " values; got " +
+// A parameter's values from the config: its size, or (Data only) 1 value broadcast.
+std::vector<double> expand(const InverseProblem::Entry& e, const std::vector<float>& v) {
+    if (int(v.size()) == e.size) return {v.begin(), v.end()};
+    if (v.size() == 1 && e.kind == InverseProblem::Kind::Data)
+        return std::vector<double>(size_t(e.size), double(v[0]));
+    if (e.kind == InverseProblem::Kind::Translate)
+        throw Error("parameter '" + e.name + "' (a translation) takes 3 values [x, y, z]; got " +
+                    std::to_string(v.size()));
+    if (e.kind == InverseProblem::Kind::Rotate)
+        throw Error("parameter '" + e.name +
+                    "' (a rotation vector in degrees: axis × angle) takes 3 values; got " +
+                    std::to_string(v.size()));
+    throw Error("parameter '" + e.name + "' has " + std::to_string(e.size) + " values; got " +
                 std::to_string(v.size()));
 }
-
-std::vector<float> to_float(const std::vector<double>& v) { return {v.begin(), v.end()}; }
 
 std::vector<double> slice(const std::vector<double>& v, int offset, int size) {
     return {v.begin() + offset, v.begin() + offset + size};
@@ -231,22 +252,26 @@ std::string snapshot_name(int iteration) {
     return buf;
 }
 
-// CSV columns: iteration, loss, parameter_error, seconds, then every optimized scalar.
+// CSV columns: iteration, loss, parameter_error, translation_error, rotation_error, seconds, then every
+// optimized scalar (rotations as rotation vectors in degrees).
 class CsvLog {
   public:
-    CsvLog(const fs::path& path, const Parameters& params) : out_(path) {
+    CsvLog(const fs::path& path, const InverseProblem& problem) : out_(path) {
         if (!out_) throw Error("cannot write '" + path.string() + "'");
-        out_ << "iteration,loss,parameter_error,seconds";
-        for (const auto& [p, offset] : params.enabled())
-            for (int k = 0; k < p->size; ++k)
-                out_ << "," << p->name << (p->size > 1 ? "[" + std::to_string(k) + "]" : "");
+        out_ << "iteration,loss,parameter_error,translation_error,rotation_error,seconds";
+        for (const InverseProblem::Entry& e : problem.entries())
+            for (int k = 0; k < e.size; ++k)
+                out_ << "," << e.name << (e.size > 1 ? "[" + std::to_string(k) + "]" : "");
         out_ << "\n";
     }
     void write(const IterationRecord& r, const std::vector<double>& x) {
         char buf[128];
-        std::snprintf(buf, sizeof(buf), "%d,%.9g,", r.iteration, r.loss);
+        std::snprintf(buf, sizeof(buf), "%d,%.9g", r.iteration, r.loss);
         out_ << buf;
-        if (std::isfinite(r.parameter_error)) out_ << std::to_string(r.parameter_error);
+        for (double error : {r.parameter_error, r.translation_error, r.rotation_error}) {
+            out_ << ",";
+            if (std::isfinite(error)) out_ << std::to_string(error);
+        }
         std::snprintf(buf, sizeof(buf), ",%.3f", r.seconds);
         out_ << buf;
         for (double v : x) {
@@ -260,14 +285,22 @@ class CsvLog {
     std::ofstream out_;
 };
 
+json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(); }
+
 void write_result_json(const fs::path& path, const OptimizeResult& result) {
     json j;
-    j["final_parameter_error"] =
-        std::isfinite(result.final_parameter_error) ? json(result.final_parameter_error) : json();
+    j["method"] = result.psdr ? "psdr" : "interior";
+    j["final_parameter_error"] = finite_or_null(result.final_parameter_error);
+    j["final_translation_error"] = finite_or_null(result.final_translation_error);
+    j["final_rotation_error_degrees"] = finite_or_null(result.final_rotation_error);
     j["seconds"] = result.seconds;
     for (const ParameterResult& p : result.parameters) {
         json e{{"initial", p.initial}, {"final", p.final}};
-        if (!p.truth.empty()) e["truth"] = p.truth, e["relative_error"] = p.relative_error;
+        if (!p.truth.empty()) {
+            e["truth"] = p.truth;
+            if (std::isfinite(p.relative_error)) e["relative_error"] = p.relative_error;
+            if (std::isfinite(p.pose_error)) e["error"] = p.pose_error;
+        }
         j["parameters"][p.name] = e;
     }
     std::ofstream out(path);
@@ -275,74 +308,71 @@ void write_result_json(const fs::path& path, const OptimizeResult& result) {
     if (!out) throw Error("cannot write '" + path.string() + "'");
 }
 
-// loss.png, and parameter_error.png when the true values are known (log-scale y).
+// loss.png, and parameter_error.png when the true values are known (log-scale y): the relative error of the
+// Data parameters, the translation error (scene units) and the rotation error (degrees), those that exist.
 void write_curves(const fs::path& out, const OptimizeConfig& config, const OptimizeResult& result) {
     if (result.history.empty()) return;
-    PlotSeries loss{"loss (" + loss_kind_name(config.loss) + ")", {}, {}}, error{"parameter error", {}, {}};
+    PlotSeries loss{"loss (" + loss_kind_name(config.loss) + ")", {}, {}};
+    PlotSeries data{"parameter error (relative)", {}, {}},
+        translation{"translation error (scene units)", {}, {}}, rotation{"rotation error (degrees)", {}, {}};
     for (const IterationRecord& r : result.history) {
         loss.x.push_back(r.iteration), loss.y.push_back(r.loss);
-        error.x.push_back(r.iteration), error.y.push_back(r.parameter_error);
+        data.x.push_back(r.iteration), data.y.push_back(r.parameter_error);
+        translation.x.push_back(r.iteration), translation.y.push_back(r.translation_error);
+        rotation.x.push_back(r.iteration), rotation.y.push_back(r.rotation_error);
     }
     write_plot((out / "loss.png").string(), {loss},
                {"Inverse rendering: loss", "iteration", "loss", true, 720, 440});
-    if (std::isfinite(result.final_parameter_error))
-        write_plot((out / "parameter_error.png").string(), {error},
-                   {"Inverse rendering: parameter error", "iteration", "|theta - theta*| / |theta*|", true,
-                    720, 440});
+    std::vector<PlotSeries> errors;
+    if (std::isfinite(result.final_parameter_error)) errors.push_back(data);
+    if (std::isfinite(result.final_translation_error)) errors.push_back(translation);
+    if (std::isfinite(result.final_rotation_error)) errors.push_back(rotation);
+    if (!errors.empty())
+        write_plot((out / "parameter_error.png").string(), errors,
+                   {"Inverse rendering: parameter error", "iteration", "error", true, 720, 440});
 }
 
 } // namespace
 
-double relative_distance(const std::vector<double>& a, const std::vector<double>& b) {
-    double d2 = 0, b2 = 0;
-    for (size_t k = 0; k < a.size(); ++k)
-        d2 += (a[k] - b[k]) * (a[k] - b[k]), b2 += b[k] * b[k];
-    return b2 > 0 ? std::sqrt(d2 / b2) : std::sqrt(d2);
-}
-
 OptimizeResult optimize(const OptimizeConfig& config,
                         const std::function<void(const IterationRecord&)>& on_iteration) {
     auto scene = load_scene(config.scene, config.defines);
-    Parameters params(*scene);
-    std::vector<std::pair<std::string, std::vector<float>>> selection;
-    for (const OptimizedParameter& p : config.parameters)
-        selection.emplace_back(p.name, std::vector<float>{});
-    params.enable(selection);
-    for (const auto& [p, offset] : params.enabled())
-        if (p->kind != Parameter::Kind::Data)
-            throw Error("parameter '" + p->name +
-                        "' is a motion; optimize only material/emitter data for now");
+    InverseProblem problem(*scene, config.parameters);
+    OptimizeResult result;
+    if (config.method == OptimizeConfig::Method::Interior && problem.geometric())
+        throw Error(
+            "method 'interior' cannot optimize a pose: the interior term alone has no silhouette or "
+            "shadow-edge (boundary) terms, so its pose gradient is biased; use method 'psdr' (or 'auto')");
+    result.psdr = config.method == OptimizeConfig::Method::Psdr ||
+                  (config.method == OptimizeConfig::Method::Auto && problem.geometric());
 
-    // Adam groups, truth and initial values, in the enabled order.
-    std::vector<AdamGroup> groups;
-    const std::vector<float> scene_values = params.values();
-    std::vector<double> truth(scene_values.begin(), scene_values.end()), x = truth;
+    // Truth and initial values, in the problem's layout (poses: 0 = the scene's pose).
+    std::vector<double> truth = problem.scene_values(), x = truth;
     for (size_t i = 0; i < config.parameters.size(); ++i) {
         const OptimizedParameter& op = config.parameters[i];
-        const auto [p, offset] = params.enabled()[i];
-        groups.push_back({op.name, offset, p->size, op.learning_rate, op.lower, op.upper});
+        const InverseProblem::Entry& e = problem.entries()[i];
         if (auto it = config.target_values.find(op.name); it != config.target_values.end()) {
-            const std::vector<double> v = expand(op.name, it->second, p->size);
-            std::copy(v.begin(), v.end(), truth.begin() + offset);
+            const std::vector<double> v = expand(e, it->second);
+            std::copy(v.begin(), v.end(), truth.begin() + e.offset);
         }
-        const std::vector<double> init =
-            op.init.empty() ? slice(truth, offset, p->size) : expand(op.name, op.init, p->size);
-        std::copy(init.begin(), init.end(), x.begin() + offset);
+        if (!op.init.empty()) {
+            const std::vector<double> v = expand(e, op.init);
+            std::copy(v.begin(), v.end(), x.begin() + e.offset);
+        }
     }
-    Adam adam(groups, params.dimension());
+    Adam adam(problem.adam_groups(), problem.dimension());
     adam.project(x);
     const std::vector<double> x_initial = x;
 
     fs::create_directories(config.output);
     const fs::path out(config.output);
-    OptimizeResult result;
     const bool known_truth = config.target_image.empty();
 
     // Target: an image, or the scene at the true values rendered with many samples (stream 0).
     Image target;
     const auto target_start = std::chrono::steady_clock::now();
     if (known_truth) {
-        params.set_values(*scene, to_float(truth));
+        problem.set_values(truth);
         target = render_image(*scene, config.target_spp, stream_seed(config.seed, 0), config.threads);
         write_image((out / "target.exr").string(), target);
         write_image((out / "target.png").string(), target);
@@ -351,16 +381,28 @@ OptimizeResult optimize(const OptimizeConfig& config,
     }
     result.target_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - target_start).count();
-    params.set_values(*scene, to_float(x));
+    problem.set_values(x);
 
-    DiffOptions diff;
-    diff.spp = config.gradient_spp;
-    diff.threads = config.threads;
-    diff.path = path_settings(*scene);
-    CsvLog log(out / "log.csv", params);
+    PsdrOptions diff;
+    diff.interior.spp = config.gradient_spp;
+    diff.interior.threads = config.threads;
+    diff.interior.path = path_settings(*scene);
+    diff.primary_spp = config.primary_spp;
+    diff.direct_spp = config.direct_spp;
+    diff.indirect_spp = config.indirect_spp;
+    CsvLog log(out / "log.csv", problem);
     const auto start = std::chrono::steady_clock::now();
     auto elapsed = [&] {
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
+    auto record_at = [&](int it, double loss) {
+        IterationRecord r{it, loss, NAN, NAN, NAN, 0.0};
+        if (known_truth) {
+            r.parameter_error = problem.data_error(truth);
+            r.translation_error = problem.translation_error(truth);
+            r.rotation_error = problem.rotation_error(truth);
+        }
+        return r;
     };
 
     for (int it = 0; it < config.iterations; ++it) {
@@ -370,18 +412,17 @@ OptimizeResult optimize(const OptimizeConfig& config,
         const Image primal =
             render_image(*scene, config.spp, stream_seed(config.seed, 2 * uint64_t(it) + 1), config.threads);
         const LossResult loss = compute_loss(config.loss, primal, target);
-        IterationRecord record{it, loss.value, known_truth ? relative_distance(x, truth) : NAN, 0.0};
+        IterationRecord record = record_at(it, loss.value);
         if (config.snapshot_every > 0 && it % config.snapshot_every == 0)
             write_image((out / snapshot_name(it)).string(), primal);
 
-        diff.seed = stream_seed(config.seed, 2 * uint64_t(it) + 2);
-        const Gradient gradient = render_gradient(*scene, params, loss.adjoint, diff);
+        diff.interior.seed = stream_seed(config.seed, 2 * uint64_t(it) + 2);
+        const std::vector<double> gradient = problem.gradient(loss.adjoint, diff, result.psdr);
         // Exponential schedule: the rates fall to lr_decay × lr at the last iteration.
         const double lr_scale =
             config.iterations > 1 ? std::pow(config.lr_decay, double(it) / (config.iterations - 1)) : 1.0;
-        const std::vector<double> x_before = x;
-        adam.step(x, gradient.values, lr_scale);
-        params.set_values(*scene, to_float(x));
+        const std::vector<double> x_before = problem.values();
+        problem.adam_step(adam, gradient, lr_scale);
 
         record.seconds = elapsed();
         log.write(record, x_before);
@@ -393,16 +434,25 @@ OptimizeResult optimize(const OptimizeConfig& config,
     write_image((out / "final.png").string(),
                 render_image(*scene, config.spp,
                              stream_seed(config.seed, 2 * uint64_t(config.iterations) + 1), config.threads));
-    for (size_t i = 0; i < config.parameters.size(); ++i) {
-        const auto [p, offset] = params.enabled()[i];
-        ParameterResult pr{p->name, slice(x_initial, offset, p->size), slice(x, offset, p->size), {}, NAN};
+    const std::vector<double> x_final = problem.values();
+    for (size_t i = 0; i < problem.entries().size(); ++i) {
+        const InverseProblem::Entry& e = problem.entries()[i];
+        ParameterResult pr{
+            e.name, slice(x_initial, e.offset, e.size), slice(x_final, e.offset, e.size), {}, NAN, NAN};
         if (known_truth) {
-            pr.truth = slice(truth, offset, p->size);
-            pr.relative_error = relative_distance(pr.final, pr.truth);
+            pr.truth = slice(truth, e.offset, e.size);
+            if (e.kind == InverseProblem::Kind::Data)
+                pr.relative_error = relative_distance(pr.final, pr.truth);
+            else
+                pr.pose_error = problem.entry_error(i, truth);
         }
         result.parameters.push_back(std::move(pr));
     }
-    if (known_truth) result.final_parameter_error = relative_distance(x, truth);
+    if (known_truth) {
+        result.final_parameter_error = problem.data_error(truth);
+        result.final_translation_error = problem.translation_error(truth);
+        result.final_rotation_error = problem.rotation_error(truth);
+    }
     write_result_json(out / "result.json", result);
 
     write_curves(out, config, result);

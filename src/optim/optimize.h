@@ -1,28 +1,38 @@
-// First inverse rendering: recover material and emitter parameters from a target image by Adam on the
-// gradient of an image loss (interior term, diff/interior.h). Driven by a JSON configuration
-// (docs/optimize.md):
+// Inverse rendering: recover material and emitter parameters and the poses of shapes from a target image by
+// Adam on the gradient of an image loss (interior term, diff/interior.h, or the psdr total with the boundary
+// terms, diff/psdr.h). Driven by a JSON configuration (docs/optimize.md):
 //
 //   scene           string     scene file, relative to the configuration file
 //   defines         object     <default> overrides, name → string or number
 //   parameters      object     name → {"init": number | [values], "lr": number, "bounds": [lo | null, hi |
 //   null]}
-//                              ("init" defaults to the scene's value, "bounds" to none)
+//                              ("init" defaults to the scene's value, "bounds" to none). A pose is
+//                              "<shape>.translate" (3 values, world units) and/or "<shape>.rotate" (a
+//                              rotation vector in degrees about the shape's bounding-box center, no bounds),
+//                              both relative to the scene's pose (optim/problem.h)
 //   target          object     {"image": path relative to the configuration}  or
 //                              {"values": {name → number | [values]}, "spp": int}: the same scene with these
 //                              values of optimized parameters (the others keep the scene's), rendered at
 //                              start
+//   method          string     "auto" (default: psdr when a pose is optimized, else interior) | "interior" |
+//                              "psdr"; "interior" with a pose is an error (it has no silhouette or shadow
+//                              term)
+//   primary_spp     int        psdr: primary boundary samples per pixel (default 4; 0 disables the term)
+//   direct_spp      int        psdr: direct boundary samples per pixel (default 4; 0 disables the term)
+//   indirect_spp    int        psdr: indirect boundary samples per pixel and technique (default 4; 0 disables it)
 //   loss            string     "l2" (default) | "rel_l2"
 //   iterations      int        number of Adam steps
 //   spp             int        samples per pixel of the primal image of each iteration
-//   gradient_spp    int        samples per pixel of the gradient (independent of the primal's)
-//   seed            int        base seed (default 0)
-//   output          string     output directory (default "optimize_out"), relative to the working directory
-//   snapshot_every  int        write iter_NNNN.png every N iterations (0 = never; default 10)
-//   lr_decay        number     learning-rate factor reached at the last iteration, decayed exponentially
+//   gradient_spp    int        samples per pixel of the gradient's interior term (independent of the
+//   primal's) seed            int        base seed (default 0) output          string     output directory
+//   (default "optimize_out"), relative to the working directory snapshot_every  int        write
+//   iter_NNNN.png every N iterations (0 = never; default 10) lr_decay        number     learning-rate factor
+//   reached at the last iteration, decayed exponentially
 //                              (default 1: constant rates)
 //   threads         int        worker threads (0 = all; default 0)
 #pragma once
 #include "optim/loss.h"
+#include "optim/problem.h"
 
 #include <nlohmann/json_fwd.hpp>
 
@@ -35,14 +45,6 @@
 
 namespace penumbra {
 
-struct OptimizedParameter {
-    std::string name;
-    std::vector<float> init; // empty: the scene's value; 1 value: broadcast
-    double learning_rate = 0.01;
-    double lower = -std::numeric_limits<double>::infinity();
-    double upper = std::numeric_limits<double>::infinity();
-};
-
 struct OptimizeConfig {
     std::string scene; // resolved path
     std::map<std::string, std::string> defines;
@@ -50,6 +52,8 @@ struct OptimizeConfig {
     std::string target_image; // resolved path, or empty for a rendered target
     std::map<std::string, std::vector<float>> target_values;
     int target_spp = 1024;
+    enum class Method { Auto, Interior, Psdr } method = Method::Auto;
+    int primary_spp = 4, direct_spp = 4, indirect_spp = 4;
     LossKind loss = LossKind::L2;
     int iterations = 100;
     int spp = 16, gradient_spp = 16;
@@ -69,26 +73,31 @@ OptimizeConfig load_optimize_config(const std::string& path);
 struct IterationRecord {
     int iteration = 0;
     double loss = 0;
-    double parameter_error =
-        std::numeric_limits<double>::quiet_NaN(); // ‖θ − θ*‖ / ‖θ*‖, NaN when θ* is unknown
-    double seconds = 0;                           // since the loop started
+    // ‖θ − θ*‖ / ‖θ*‖ over the Data parameters; the largest translation error (scene units) and rotation
+    // error (degrees) over the poses. NaN when θ* is unknown or there is no such parameter.
+    double parameter_error = std::numeric_limits<double>::quiet_NaN();
+    double translation_error = std::numeric_limits<double>::quiet_NaN();
+    double rotation_error = std::numeric_limits<double>::quiet_NaN();
+    double seconds = 0; // since the loop started
 };
 
 struct ParameterResult {
     std::string name;
     std::vector<double> initial, final, truth;                        // truth empty when unknown
-    double relative_error = std::numeric_limits<double>::quiet_NaN(); // ‖final − truth‖ / ‖truth‖
+    double relative_error = std::numeric_limits<double>::quiet_NaN(); // Data: ‖final − truth‖ / ‖truth‖
+    // translate: ‖t − t*‖ (scene units); rotate: the angle of R R*ᵀ (degrees)
+    double pose_error = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct OptimizeResult {
     std::vector<IterationRecord> history;
     std::vector<ParameterResult> parameters;
     double final_parameter_error = std::numeric_limits<double>::quiet_NaN();
+    double final_translation_error = std::numeric_limits<double>::quiet_NaN();
+    double final_rotation_error = std::numeric_limits<double>::quiet_NaN();
+    bool psdr = false; // the method used
     double target_seconds = 0, seconds = 0;
 };
-
-// ‖a − b‖ / ‖b‖ (‖a − b‖ when b = 0).
-double relative_distance(const std::vector<double>& a, const std::vector<double>& b);
 
 // Runs the optimization; writes log.csv, snapshots, final.png, loss.png and result.json into config.output.
 // `on_iteration` is called after each iteration's loss is known.

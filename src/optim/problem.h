@@ -1,0 +1,91 @@
+// The optimized quantities of an inverse problem as one flat vector, the layout Adam steps in:
+//   Data parameters      their values (materials, emitters, ...),
+//   <shape>.translate    t ∈ R³, world units, relative to the scene's pose,
+//   <shape>.rotate       a rotation vector in degrees (axis-angle: direction = world axis, norm = angle)
+//                        about the shape's bounding-box center in the scene (optim/pose.h).
+// Tangent vectors (gradients, Adam steps, finite-difference directions) have the same layout; for rotations
+// they are world-frame increments ω (degrees) applied on the left, R ← exp([ω]×) R.
+// Gradients come from the interior term alone or from the psdr total (interior + boundary terms,
+// diff/psdr.h); a pose needs the latter, since silhouettes and shadows carry most of its signal.
+#pragma once
+#include "diff/psdr.h"
+#include "optim/adam.h"
+#include "optim/pose.h"
+
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace penumbra {
+
+struct OptimizedParameter {
+    std::string name;
+    std::vector<float> init; // empty: the scene's value (0 for a pose); 1 value: broadcast (Data only)
+    double learning_rate = 0.01;
+    double lower = -std::numeric_limits<double>::infinity(); // not allowed for rotations
+    double upper = std::numeric_limits<double>::infinity();
+};
+
+// ‖a − b‖ / ‖b‖ (‖a − b‖ when b = 0).
+double relative_distance(const std::vector<double>& a, const std::vector<double>& b);
+
+class InverseProblem {
+  public:
+    enum class Kind { Data, Translate, Rotate };
+    struct Entry {
+        std::string name;
+        Kind kind = Kind::Data;
+        int offset = 0, size = 0; // in the flat vector
+        int param_offset = 0;     // Data: its index in Parameters; poses: the first of 3 motion indices
+        int pose = -1;            // Translate / Rotate: index into poses()
+        double learning_rate = 0.01, lower = 0, upper = 0;
+    };
+
+    // Resolves the names against the scene. Throws Error for unknown names, camera motions, scaling, a
+    // parameter given twice, vertex_positions together with a pose of the same shape, and bounds on a
+    // rotation.
+    InverseProblem(Scene& scene, const std::vector<OptimizedParameter>& parameters);
+    ~InverseProblem();
+
+    int dimension() const { return dimension_; }
+    const std::vector<Entry>& entries() const { return entries_; }
+    bool geometric() const { return !poses_.empty(); }
+    const std::vector<ShapePose>& poses() const { return poses_; }
+    std::vector<AdamGroup> adam_groups() const;
+
+    // The scene's own values (poses: 0).
+    std::vector<double> scene_values() const { return scene_values_; }
+    // Current values (rotations as rotation vectors in degrees).
+    std::vector<double> values() const;
+    // Sets the values and moves the scene there (Data written, posed meshes rebuilt, the BVH rebuilt).
+    void set_values(const std::vector<double>& x);
+    // x ⊕ δ: Data and translations add δ, rotations compose on the left with exp([δ]×) (δ in degrees).
+    void retract(const std::vector<double>& delta);
+    // One Adam step with a gradient in the tangent layout (rotations: increments from 0, then retracted).
+    void adam_step(Adam& adam, const std::vector<double>& gradient, double learning_rate_scale);
+
+    // dL/dx in the tangent layout for the adjoint ∂L/∂I at the current values. With `psdr` the boundary terms
+    // are included (options.primary_spp / direct_spp); otherwise only options.interior is used.
+    std::vector<double> gradient(const Image& adjoint, const PsdrOptions& options, bool psdr) const;
+
+    // Errors against true values (the values() layout): ‖x − x*‖ / ‖x*‖ over Data entries; ‖t − t*‖ (scene
+    // units) and the angle of R R*ᵀ (degrees) of one pose entry. NaN when there is no such entry.
+    double data_error(const std::vector<double>& truth) const;
+    double entry_error(size_t entry, const std::vector<double>& truth) const;
+    // The largest translation / rotation error over the pose entries (NaN when there is none).
+    double translation_error(const std::vector<double>& truth) const;
+    double rotation_error(const std::vector<double>& truth) const;
+
+  private:
+    void apply();
+    Scene& scene_;
+    std::unique_ptr<Parameters> params_;
+    std::vector<Entry> entries_;
+    std::vector<ShapePose> poses_;
+    std::vector<std::pair<std::string, std::vector<float>>> data_selection_, selection_;
+    std::vector<double> data_values_, scene_values_;
+    int dimension_ = 0;
+};
+
+} // namespace penumbra
