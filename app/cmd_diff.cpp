@@ -97,6 +97,7 @@ PsdrOptions psdr_options(const Scene& scene, const Common& c, int batches, bool 
     o.primary_spp = c.method == "psdr" && c.boundary_spp > 0 ? std::max(1, c.boundary_spp / batches) : 0;
     o.direct_spp = o.primary_spp;
     o.indirect_spp = o.primary_spp;
+    o.pixel_spp = o.primary_spp;
     return o;
 }
 
@@ -180,6 +181,7 @@ void cmd_derivative(const Common& c, bool no_antithetic) {
         if (total) write_signed(c.terms_prefix + "_primary" + lower_extension(c.output), d.primary);
         if (total) write_signed(c.terms_prefix + "_direct" + lower_extension(c.output), d.direct);
         if (total) write_signed(c.terms_prefix + "_indirect" + lower_extension(c.output), d.indirect);
+        if (total && needs_pixel_boundary(*scene)) write_signed(c.terms_prefix + "_pixel" + lower_extension(c.output), d.pixel);
     }
     const Film& film = *scene->sensor->film;
     std::fprintf(stderr, "derivative (%s) %dx%d at %d spp%s in %.2f s, mean %.6g -> %s\n",
@@ -294,7 +296,7 @@ void add_diff_commands(CLI::App& app) {
     d->add_option("--stderr", deriv->stderr_output, "per-pixel standard-error image (.exr)");
     d->add_option("--batches", deriv->batches, "independent batches for --stderr (default 8)")->check(CLI::PositiveNumber);
     d->add_flag("--no-antithetic", *no_antithetic, "disable pixel-level antithetic sampling");
-    d->add_option("--terms", deriv->terms_prefix, "also write each term's image as PREFIX_interior / _primary / _direct");
+    d->add_option("--terms", deriv->terms_prefix, "also write each term's image as PREFIX_interior / _primary / _direct / _indirect (/ _pixel with a box filter)");
     d->add_option("--adjoint", deriv->adjoint, "--method paths --adaptive: adjoint image ∂L/∂I giving the pixel importance");
     add_method(d, *deriv);
     d->callback([deriv, no_antithetic] { cmd_derivative(*deriv, *no_antithetic); });

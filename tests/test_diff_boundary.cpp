@@ -32,6 +32,7 @@ BoundaryRun run(const std::string& scene_file, const std::string& param, double 
     o.primary_spp = primary ? boundary_spp : 0;
     o.direct_spp = direct ? boundary_spp : 0;
     o.indirect_spp = indirect ? boundary_spp : 0;
+    o.pixel_spp = boundary_spp; // box filters only
     BoundaryRun r{psdr_derivative(*scene, params, o), {}};
     RenderOptions ro;
     ro.spp = fd_spp;
@@ -117,6 +118,15 @@ TEST(DirectBoundary, TranslatingAreaLightPartlyOccluded) {
 // past the cube's edges to the floor).
 TEST(IndirectBoundary, ShadowSeenThroughAGlossyReflection) {
     expect_boundary_matters("glossy_shadow.xml", "cube.translate=1,0,0", 2e-2, 512, 512, true, true, true, 32, "point");
+}
+
+// The pixel-boundary term of a box filter: a checkerboard plane seen by a moving camera. The interior term alone
+// misses the image-space motion. Steps move the image by ~0.02 px: central differences of box-filtered pixels
+// smear texture edges that pass within a step of a pixel edge over both pixels. (The camera is offset so that no texture edge lies on a pixel edge, where the
+// derivative of a box-filtered pixel is discontinuous and central differences split it between two pixels.)
+TEST(PixelBoundary, BoxFilterUnderCameraMotion) {
+    expect_boundary_matters("pixel_edges.xml", "cam.translate=1,0,0", 2e-3, 256, 1024, false, false);
+    expect_boundary_matters("pixel_edges.xml", "cam.rotate=0,1,0", 5e-4, 256, 1024, false, false);
 }
 
 // Reverse mode includes the boundary terms: ⟨a, (interior + boundary) v⟩ = ⟨gradient, v⟩ on the same samples

@@ -1,11 +1,13 @@
 // The total derivative of paper 001 Eq. 19 as separate estimators with their own sample budgets: the interior
 // term (diff/interior.h) plus the boundary terms: primary (camera segments, diff/primary_boundary.h), direct
 // (emitter segments seen by the camera, diff/direct_boundary.h) and indirect (every other boundary segment,
-// diff/indirect_boundary.h). Each term's image is kept for validation against finite differences.
+// diff/indirect_boundary.h), plus the pixel-boundary term of a box filter (diff/pixel_boundary.h). Each term's
+// image is kept for validation against finite differences.
 #pragma once
 #include "diff/interior.h"
 #include "diff/direct_boundary.h"
 #include "diff/indirect_boundary.h"
+#include "diff/pixel_boundary.h"
 #include "diff/primary_boundary.h"
 
 namespace penumbra {
@@ -15,6 +17,7 @@ struct PsdrOptions {
     int primary_spp = 4;      // primary boundary samples per pixel (per batch); 0 disables the term
     int direct_spp = 4;       // direct boundary samples per pixel (per batch); 0 disables the term
     int indirect_spp = 4;     // indirect boundary samples per pixel and technique (per batch); 0 disables it
+    int pixel_spp = 4;        // pixel-boundary samples per pixel (per batch; box filters only); 0 disables it
 };
 
 struct PsdrDerivative {
@@ -25,6 +28,8 @@ struct PsdrDerivative {
     Image direct_stderr;
     Image indirect;            // indirect boundary term
     Image indirect_stderr;
+    Image pixel;               // pixel-boundary term (zero unless the film has a box filter)
+    Image pixel_stderr;
     Image total;               // interior + boundary
     Image total_stderr;        // combined standard error (the estimators are independent)
 };

@@ -1,0 +1,31 @@
+// The pixel-boundary term of the material-form camera vertex (paper 001 §4.3): with a box reconstruction
+// filter, P_j(s) jumps at pixel j's edges, and as the geometry (or the camera) moves, the material points seen
+// just inside an edge cross it. For pixel j the term is
+//     −∮_{∂pixel j} L(s) (ṡ(s) · n_out(s)) dℓ(s),
+// with ṡ the film-space velocity of the material point seen at s (first order, on the tape) and n_out the
+// pixel's outward normal; the interior term, whose filter is constant inside the pixel, misses it. Continuous
+// filters (tent, gaussian) need no such term. Points are drawn uniformly on all pixel edges of the film; each
+// interior edge point contributes to the two pixels it separates.
+#pragma once
+#include "core/image.h"
+#include "diff/boundary_driver.h"
+
+namespace penumbra {
+
+// Whether the scene's film needs the pixel-boundary term (a box filter).
+bool needs_pixel_boundary(const Scene& scene);
+
+class PixelBoundary {
+public:
+    explicit PixelBoundary(const Scene& scene) : scene_(scene) {}
+    // Forward mode: the pixel-boundary term's contribution to dI/dθ.
+    Image derivative(const Parameters& params, const BoundaryOptions& options) const;
+    // Reverse mode: adds Σ_pixels adjoint · (pixel-boundary term) to `gradient`.
+    void gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
+                  std::vector<double>& gradient) const;
+
+private:
+    const Scene& scene_;
+};
+
+} // namespace penumbra
