@@ -11,7 +11,8 @@ bool connect_to_camera(const Scene& scene, const SurfaceInteraction3f& si, Camer
     const Sensor& sensor = *scene.sensor;
     float jacobian;
     if (!sensor.film_position(si.p, si.n, out.s, jacobian)) return false;
-    if (!(out.s.x >= 0.f && out.s.y >= 0.f && out.s.x <= sensor.film->width && out.s.y <= sensor.film->height))
+    const float r = sensor.film->rfilter->radius(); // border pixels' filters reach r beyond the film
+    if (!(out.s.x >= -r && out.s.y >= -r && out.s.x <= sensor.film->width + r && out.s.y <= sensor.film->height + r))
         return false;
     const Vec3f to_cam = sensor.to_sensor(si.p);
     const float cos_cam = std::abs(dot(si.n, to_cam));

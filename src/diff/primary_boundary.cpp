@@ -4,6 +4,8 @@
 #include "diff/edges.h"
 #include "diff/material_form.h"
 
+#include <algorithm>
+
 namespace penumbra {
 
 // Silhouette edges as seen from the reference camera, with their projections. Edges with an endpoint behind
@@ -67,8 +69,22 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
     const Vec2f dir = se.s1 - se.s0;
     const Vec2f n2 = Vec2f(-dir.y, dir.x) / std::sqrt(dir.x * dir.x + dir.y * dir.y);
 
-    // Which side is the occluder (a face adjacent to the edge) and which the background behind it.
-    constexpr float eps = 1e-3f; // pixels
+    const Vec3f p0 = se.shape->mesh.positions[se.edge.v0], p1 = se.shape->mesh.positions[se.edge.v1];
+    const Vec3f x_edge = p0 + (p1 - p0) * tau;
+
+    // Which side is the occluder (a face adjacent to the edge) and which the background behind it, probed at
+    // s ± eps n2. L_bg is the limit of the background's radiance at the silhouette, but rays leaving the
+    // background point start RayEpsilon-scaled offsets off its surface: a shadow ray toward a light at (or near)
+    // the camera runs back along the probe and, closer to the edge than those offsets, clips the occluder and
+    // reports a false shadow. The probe therefore clears the edge by twice the offset scale of the segment
+    // camera–edge (which bounds the offset of any point behind the edge as seen at the edge's depth), clamped
+    // to [1e-3, 0.05] pixels so that L_bg and u_bg stay the limits at the edge up to a small fraction of a pixel.
+    const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
+    const float clearance = 2.f * RayEpsilon * (1.f + max_component(abs(eye)) + norm(x_edge - eye));
+    const Ray center = sensor.sample_ray(out.s, Vec2f(0.5f)).first, side = sensor.sample_ray(out.s + n2, Vec2f(0.5f)).first;
+    const float depth = norm(x_edge - center.o);
+    const float world_per_pixel = norm(side.o + side.d * depth - (center.o + center.d * depth));
+    const float eps = std::clamp(clearance / world_per_pixel, 1e-3f, 0.05f); // pixels
     const auto [ray_a, wa] = sensor.sample_ray(out.s + n2 * eps, sampler.next_2d());
     const auto [ray_b, wb] = sensor.sample_ray(out.s - n2 * eps, sampler.next_2d());
     rays.rays += 2;
@@ -81,8 +97,6 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
     const Ray& bg_ray = a_occ ? ray_b : ray_a;
     const SurfaceInteraction3f& bg = a_occ ? hit_b : hit_a;
     const Vec2f n = a_occ ? n2 * -1.f : n2; // from the occluder toward the background
-    const Vec3f p0 = se.shape->mesh.positions[se.edge.v0], p1 = se.shape->mesh.positions[se.edge.v1];
-    const Vec3f x_edge = p0 + (p1 - p0) * tau;
     if (bg.is_valid() && bg.t < norm(x_edge - bg_ray.o) * (1.f - 1e-4f)) return out;
 
     // L_bg: a path-traced estimate of the radiance seen just beyond the silhouette.
@@ -90,11 +104,11 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
     const float pdf = 1.f / sil.total_length;
     out.weight = L_bg * (-1.f / pdf);
 
-    // Image-space velocities of the edge point and of the background point (first order, on the tape).
+    // Image-space velocities of the edge point (fixed barycentric position on the moving edge, Eq. 47 of paper
+    // 001) and of the background's material point (Eq. 50), first order, on the tape.
     const Vec3<Var> x_e = form.position(*se.shape, se.edge.v0) +
                           (form.position(*se.shape, se.edge.v1) - form.position(*se.shape, se.edge.v0)) * Var(tau);
     const Vec3<Var> view(Vec3f(0.f, 0.f, 1.f));
-    const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
     Vec2<Var> s_e, s_b(Var(out.s.x), Var(out.s.y));
     Var j;
     if (!sensor.film_position(form.to_reference_camera(x_e, eye), view, s_e, j)) return out;
