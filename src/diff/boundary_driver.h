@@ -1,7 +1,7 @@
-// What the boundary estimators share: a boundary sample is a film position s, a detached weight (the
-// discontinuity's jump times the measure conversions, over the sampling density) and the normal velocity of the
-// discontinuity as a tape expression. The drivers run the samples in 16 fixed chunks (results do not depend on
-// the thread count), splat weight × dv/dθ through the pixel filter in forward mode, and propagate the
+// What the boundary estimators share: a boundary sample is one or more film positions s with detached weights
+// (the discontinuity's jump times the measure conversions, over the sampling density) and the normal velocity
+// of the discontinuity as a tape expression. The drivers run the samples in 16 fixed chunks (results do not
+// depend on the thread count), splat weight × dv/dθ through the pixel filter in forward mode, and propagate the
 // filter-weighted adjoint back to the parameters in reverse mode.
 #pragma once
 #include "diff/parameters.h"
@@ -25,27 +25,21 @@ struct BoundaryOptions {
 };
 
 struct BoundarySample {
-    bool valid = false;
-    Vec2f s;        // film position (pixels)
-    Color3f weight; // detached factor
-    Var velocity;   // value ~0; its derivative is the discontinuity's normal velocity
-    // Further splats of the same discontinuity (a detector subpath connected to the camera at several vertices).
-    static constexpr int MaxMore = 7;
-    std::array<std::pair<Vec2f, Color3f>, MaxMore> more;
-    int n_more = 0;
+    Var velocity; // value ~0; its derivative is the discontinuity's normal velocity
+    // Where the discontinuity's contribution lands: film positions (pixels) with detached factors; several for a
+    // detector subpath connected to the camera at several vertices, none for a failed sample.
+    static constexpr int MaxSplats = 8;
+    std::array<std::pair<Vec2f, Color3f>, MaxSplats> splats;
+    int n_splats = 0;
 
-    void add_splat(const Vec2f& at, const Color3f& w) {
-        if (!valid) s = at, weight = w, valid = true;
-        else if (n_more < MaxMore) more[n_more++] = {at, w};
+    void add_splat(const Vec2f& s, const Color3f& weight) {
+        if (n_splats < MaxSplats) splats[n_splats++] = {s, weight};
     }
-    template <typename Visit> void for_each_splat(const Visit& visit) const {
-        visit(s, weight);
-        for (int k = 0; k < n_more; ++k) visit(more[k].first, more[k].second);
-    }
-    bool finite() const {
-        bool ok = true;
-        for_each_splat([&](const Vec2f&, const Color3f& w) { ok = ok && is_finite(w); });
-        return ok;
+    bool usable() const {
+        if (n_splats == 0 || velocity.id < 0) return false;
+        for (int k = 0; k < n_splats; ++k)
+            if (!is_finite(splats[k].second)) return false;
+        return true;
     }
 };
 
@@ -82,13 +76,13 @@ Image boundary_derivative(const Scene& scene, const Parameters& params, const Bo
         tape.clear();
         RayCounter rays;
         const BoundarySample b = sample(sampler, rays);
-        if (b.valid && b.velocity.id >= 0 && b.finite()) {
+        if (b.usable()) {
             tape.forward(params.direction().data(), tangent);
             const float dv = float(double(tangent[b.velocity.id]) / n);
-            b.for_each_splat([&](const Vec2f& s, const Color3f& weight) {
-                const Color3f value = weight * dv;
-                for_each_pixel_in_footprint(film, s, [&](int x, int y, float w) { chunks[c].at(x, y) += value * w; });
-            });
+            for (int k = 0; k < b.n_splats; ++k) {
+                const Color3f value = b.splats[k].second * dv;
+                for_each_pixel_in_footprint(film, b.splats[k].first, [&](int x, int y, float w) { chunks[c].at(x, y) += value * w; });
+            }
         }
         tape.clear();
     });
@@ -112,11 +106,11 @@ void boundary_gradient(const Scene& scene, const Image& adjoint, const BoundaryO
         tape.clear();
         RayCounter rays;
         const BoundarySample b = sample(sampler, rays);
-        if (b.valid && b.velocity.id >= 0 && b.finite()) {
+        if (b.usable()) {
             double seed = 0;
-            b.for_each_splat([&](const Vec2f& s, const Color3f& weight) {
-                for_each_pixel_in_footprint(film, s, [&](int x, int y, float w) { seed += w * dot(adjoint.at(x, y), weight); });
-            });
+            for (int k = 0; k < b.n_splats; ++k)
+                for_each_pixel_in_footprint(film, b.splats[k].first,
+                                            [&](int x, int y, float w) { seed += w * dot(adjoint.at(x, y), b.splats[k].second); });
             tape.backward({{b.velocity.id, float(seed / n)}}, local.local().data(), scratch);
         }
         tape.clear();

@@ -62,7 +62,7 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
     float u = sampler.next_1d();
     const Silhouettes::SilhouetteEdge& se = sil.edges[sil.by_length.sample(u)];
     const float t = u;
-    out.s = se.s0 + (se.s1 - se.s0) * t;
+    const Vec2f s = se.s0 + (se.s1 - se.s0) * t;
     // The 3D edge point projecting to s (perspective-correct along the edge; affine for a parallel projection).
     const bool parallel = sensor.plugin == "orthographic";
     const float tau = parallel ? t : t * se.z0 / ((1.f - t) * se.z1 + t * se.z0);
@@ -81,12 +81,12 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
     // to [1e-3, 0.05] pixels so that L_bg and u_bg stay the limits at the edge up to a small fraction of a pixel.
     const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
     const float clearance = 2.f * RayEpsilon * (1.f + max_component(abs(eye)) + norm(x_edge - eye));
-    const Ray center = sensor.sample_ray(out.s, Vec2f(0.5f)).first, side = sensor.sample_ray(out.s + n2, Vec2f(0.5f)).first;
+    const Ray center = sensor.sample_ray(s, Vec2f(0.5f)).first, side = sensor.sample_ray(s + n2, Vec2f(0.5f)).first;
     const float depth = norm(x_edge - center.o);
     const float world_per_pixel = norm(side.o + side.d * depth - (center.o + center.d * depth));
     const float eps = std::clamp(clearance / world_per_pixel, 1e-3f, 0.05f); // pixels
-    const auto [ray_a, wa] = sensor.sample_ray(out.s + n2 * eps, sampler.next_2d());
-    const auto [ray_b, wb] = sensor.sample_ray(out.s - n2 * eps, sampler.next_2d());
+    const auto [ray_a, wa] = sensor.sample_ray(s + n2 * eps, sampler.next_2d());
+    const auto [ray_b, wb] = sensor.sample_ray(s - n2 * eps, sampler.next_2d());
     rays.rays += 2;
     const SurfaceInteraction3f hit_a = scene.intersect(ray_a), hit_b = scene.intersect(ray_b);
     auto adjacent = [&](const SurfaceInteraction3f& h) {
@@ -102,19 +102,18 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
     // L_bg: a path-traced estimate of the radiance seen just beyond the silhouette.
     const Color3f L_bg = trace_path<float>(scene, sampler, bg_ray, bg, bg, ReferenceGeometry{}, settings, rays);
     const float pdf = 1.f / sil.total_length;
-    out.weight = L_bg * (-1.f / pdf);
 
     // Image-space velocities of the edge point (fixed barycentric position on the moving edge, Eq. 47 of paper
     // 001) and of the background's material point (Eq. 50), first order, on the tape.
     const Vec3<Var> x_e = form.position(*se.shape, se.edge.v0) +
                           (form.position(*se.shape, se.edge.v1) - form.position(*se.shape, se.edge.v0)) * Var(tau);
     const Vec3<Var> view(Vec3f(0.f, 0.f, 1.f));
-    Vec2<Var> s_e, s_b(Var(out.s.x), Var(out.s.y));
+    Vec2<Var> s_e, s_b(Var(s.x), Var(s.y));
     Var j;
     if (!sensor.film_position(form.to_reference_camera(x_e, eye), view, s_e, j)) return out;
     if (bg.is_valid() && !sensor.film_position(form.to_reference_camera(form.vertex(bg).p, eye), view, s_b, j)) return out;
     out.velocity = (s_e.x - s_b.x) * Var(n.x) + (s_e.y - s_b.y) * Var(n.y);
-    out.valid = true;
+    out.add_splat(s, L_bg * (-1.f / pdf));
     return out;
 }
 
