@@ -275,8 +275,8 @@ void cmd_compare(const std::string& test, const std::string& ref, const std::str
     std::printf("relerr = %.6f   (Σ|D−R| / Σ|R| over %dx%d pixels)\n", c.relerr, a.width, a.height);
     std::printf("mean: test %.6g  reference %.6g\n", c.mean_test, c.mean_ref);
     if (!sa.pixels.empty() || !sb.pixels.empty())
-        std::printf("z-score of the image mean = %.3f   pixels with |z| > 3: %.2f%%\n", c.mean_z,
-                    100.0 * c.outlier_fraction);
+        std::printf("z-score of the image mean = %.3f   pixels with |z| > 3: %.2f%%   relerr expected from noise: %.6f\n",
+                    c.mean_z, 100.0 * c.outlier_fraction, c.noise_relerr);
 }
 
 } // namespace

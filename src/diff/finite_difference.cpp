@@ -43,7 +43,7 @@ Comparison compare_images(const Image& test, const Image& ref, const Image& test
             throw Error("compare: the standard-error image does not have the images' size");
     const bool have_se = !test_stderr.pixels.empty() || !ref_stderr.pixels.empty();
     Comparison c;
-    double abs_diff = 0, abs_ref = 0, var_sum = 0;
+    double abs_diff = 0, abs_ref = 0, var_sum = 0, sigma_sum = 0;
     size_t outliers = 0;
     const size_t n = ref.pixels.size() * 3;
     for (size_t i = 0; i < ref.pixels.size(); ++i)
@@ -58,6 +58,7 @@ Comparison compare_images(const Image& test, const Image& ref, const Image& test
                 const double s2 = ref_stderr.pixels.empty() ? 0.0 : ref_stderr.pixels[i][k];
                 const double var = s1 * s1 + s2 * s2;
                 var_sum += var;
+                sigma_sum += std::sqrt(var);
                 if (std::abs(t - r) > 3.0 * std::sqrt(var)) ++outliers;
             }
         }
@@ -68,6 +69,8 @@ Comparison compare_images(const Image& test, const Image& ref, const Image& test
         const double se = std::sqrt(var_sum) / double(n);
         c.mean_z = se > 0 ? (c.mean_test - c.mean_ref) / se : 0.0;
         c.outlier_fraction = double(outliers) / double(n);
+        // E|X| = sqrt(2/π) σ for X ~ N(0, σ²).
+        c.noise_relerr = abs_ref > 0 ? std::sqrt(2.0 / M_PI) * sigma_sum / abs_ref : 0.0;
     }
     return c;
 }

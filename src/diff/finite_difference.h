@@ -23,6 +23,7 @@ struct Comparison {
     double mean_test = 0, mean_ref = 0;
     double mean_z = 0;            // (mean_test − mean_ref) / stderr of the difference of means (0 without stderr)
     double outlier_fraction = 0;  // fraction of pixel channels with |D − R| > 3 σ (0 without stderr)
+    double noise_relerr = 0;      // relerr expected from noise alone, sqrt(2/π) Σσ / Σ|R| (0 without stderr)
 };
 
 // `test_stderr` / `ref_stderr` are optional (empty images); standard errors combine in quadrature. The
