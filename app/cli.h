@@ -33,5 +33,6 @@ private:
 void add_render_commands(CLI::App& app);   // render, info
 void add_diff_commands(CLI::App& app);     // params, derivative, gradient, fd, compare
 void add_optimize_command(CLI::App& app);  // optimize
+void add_study_commands(CLI::App& app);    // variance-study, sampling-demo
 
 } // namespace penumbra::cli

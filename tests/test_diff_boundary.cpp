@@ -63,6 +63,12 @@ TEST(PrimaryBoundary, RotatingCubeSilhouette) {
     expect_boundary_matters("silhouette.xml", "box.rotate=0,1,0", 3e-2, 16, 64, true, false);
 }
 
+// The light sits at the camera (a flash): every shadow edge is also a silhouette, and the jump there must be
+// counted once (by the primary term), not again by the direct term.
+TEST(PrimaryBoundary, LightAtTheCameraCountsSilhouettesOnce) {
+    expect_boundary_matters("silhouette.xml", "box.rotate=0,1,0", 3e-2, 16, 64, true, true, true);
+}
+
 TEST(PrimaryBoundary, TranslatingCubeSilhouette) {
     expect_boundary_matters("silhouette.xml", "box.translate=1,0.5,0", 2e-2, 16, 64, true, false);
 }

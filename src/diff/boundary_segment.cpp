@@ -113,6 +113,7 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& f
     const bool plus_dark = scene.occluded(probe_plus), minus_dark = scene.occluded(probe_minus);
     if (plus_dark == minus_dark) return out;
     if (!plus_dark) n = n * -1.f;
+    out.dark_point = x_d + n * eps;
 
     recv.wi = recv.to_local(dir * -1.f);
     out.receiver = recv;

@@ -58,6 +58,7 @@ struct BoundarySegment {
     SurfaceInteraction3f receiver; // x_D0, with wi pointing toward the source
     float stretch = 0.f;           // dℓ(x_D0) / dℓ(x_B)
     float cos_receiver = 0.f;      // |n(x_D0) · ω| for the segment's direction ω
+    Vec3f dark_point;              // a point of the receiver just across the curve, on the occluded side
     Var velocity;                  // (x_D0(θ) − receiver material point(θ)) · n_dark: its derivative is the
                                    // curve's normal velocity, n_dark pointing into the occluded side
 };

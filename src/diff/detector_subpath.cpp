@@ -6,6 +6,17 @@ namespace penumbra {
 
 namespace {
 
+// Whether the camera sees the point p (on a surface with normal n).
+bool camera_sees(const Scene& scene, const Vec3f& p, const Vec3f& n, RayCounter& rays) {
+    const Sensor& sensor = *scene.sensor;
+    Interaction3f at;
+    at.p = p;
+    at.n = n;
+    ++rays.rays;
+    return !scene.occluded(sensor.plugin == "orthographic" ? at.spawn_ray(sensor.to_sensor(p))
+                                                           : at.spawn_ray_to(sensor.to_world.apply_point(Vec3f(0.f))));
+}
+
 // The camera's importance at `si` in film measure, times the adjoint BSDF toward the camera.
 bool connect_to_camera(const Scene& scene, const SurfaceInteraction3f& si, CameraConnection& out, RayCounter& rays) {
     const Sensor& sensor = *scene.sensor;
@@ -17,10 +28,7 @@ bool connect_to_camera(const Scene& scene, const SurfaceInteraction3f& si, Camer
     const Vec3f to_cam = sensor.to_sensor(si.p);
     const float cos_cam = std::abs(dot(si.n, to_cam));
     if (!(cos_cam > 0.f)) return false;
-    ++rays.rays;
-    const Ray cam_ray = sensor.plugin == "orthographic" ? si.spawn_ray(to_cam)
-                                                        : si.spawn_ray_to(sensor.to_world.apply_point(Vec3f(0.f)));
-    if (scene.occluded(cam_ray)) return false;
+    if (!camera_sees(scene, si.p, si.n, rays)) return false;
     const Color3f f = si.bsdf()->eval(BSDFContext{TransportMode::Importance}, si, si.to_local(to_cam)) *
                       adjoint_shading_correction(si, to_cam);
     out.weight = f * (jacobian / cos_cam);
@@ -29,8 +37,9 @@ bool connect_to_camera(const Scene& scene, const SurfaceInteraction3f& si, Camer
 
 } // namespace
 
-void detector_connections(const Scene& scene, const SurfaceInteraction3f& x_d0, int t_min, int t_max,
-                          const PathSettings& settings, Sampler& sampler, RayCounter& rays, DetectorConnections& out) {
+void detector_connections(const Scene& scene, const SurfaceInteraction3f& x_d0, const Vec3f& dark_point, int t_min,
+                          int t_max, const PathSettings& settings, Sampler& sampler, RayCounter& rays,
+                          DetectorConnections& out) {
     const BSDFContext ctx{TransportMode::Importance};
     SurfaceInteraction3f si = x_d0;
     Color3f throughput(1.f);
@@ -39,7 +48,7 @@ void detector_connections(const Scene& scene, const SurfaceInteraction3f& x_d0, 
         if (!bsdf) return;
         if (t >= t_min && bsdf->has(BSDFSmooth)) {
             CameraConnection c;
-            if (connect_to_camera(scene, si, c, rays)) {
+            if (connect_to_camera(scene, si, c, rays) && (t > 0 || camera_sees(scene, dark_point, si.n, rays))) {
                 c.weight *= throughput;
                 c.t = t;
                 out.items[out.count++] = c;

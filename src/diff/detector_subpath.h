@@ -25,8 +25,12 @@ struct DetectorConnections {
 };
 
 // Connections of the vertices at depths t_min ≤ t ≤ t_max (t_max < 0: unbounded, with Russian roulette
-// from settings.rr_depth; at most Capacity connections). `x_d0.wi` points toward the source.
-void detector_connections(const Scene& scene, const SurfaceInteraction3f& x_d0, int t_min, int t_max,
-                          const PathSettings& settings, Sampler& sampler, RayCounter& rays, DetectorConnections& out);
+// from settings.rr_depth; at most Capacity connections). `x_d0.wi` points toward the source. The connection
+// of x_D0 itself also requires the camera to see `dark_point`, the receiver just across the discontinuity
+// curve: where the curve is also a silhouette seen by the camera (a light at the camera, say), the jump is
+// counted once, by the primary term, instead of twice.
+void detector_connections(const Scene& scene, const SurfaceInteraction3f& x_d0, const Vec3f& dark_point, int t_min,
+                          int t_max, const PathSettings& settings, Sampler& sampler, RayCounter& rays,
+                          DetectorConnections& out);
 
 } // namespace penumbra

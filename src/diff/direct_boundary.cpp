@@ -45,7 +45,7 @@ BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edg
     const BoundarySegment seg = trace_boundary_segment(scene, form, light, x_b, rays);
     if (!seg.valid) return out;
     DetectorConnections connections;
-    detector_connections(scene, seg.receiver, t_min, t_max, settings, sampler, rays, connections);
+    detector_connections(scene, seg.receiver, seg.dark_point, t_min, t_max, settings, sampler, rays, connections);
     // The segment's factor: incident term × |cos| at x_D0 × dℓ(x_D0)/dℓ(x_B), over the edge and light densities.
     const Color3f factor =
         incident(*emitter, light, seg.receiver.p) * (seg.cos_receiver * seg.stretch * edges.total_length / light_pdf);

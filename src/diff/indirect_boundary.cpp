@@ -46,7 +46,7 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
     if (!seg.valid) return out;
 
     DetectorConnections connections;
-    detector_connections(scene, seg.receiver, 0, t_max, settings, sampler, rays, connections);
+    detector_connections(scene, seg.receiver, seg.dark_point, 0, t_max, settings, sampler, rays, connections);
     if (connections.count == 0) return out;
 
     // G(x_S0, x_D0) times the Jacobian of Eq. 40 over the density of (x_B, ω_B):
