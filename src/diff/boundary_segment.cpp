@@ -79,17 +79,27 @@ bool grazes(const SceneEdges::SceneEdge& se, const Vec3f& d) {
 BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& form, const SegmentSource& source,
                                        const EdgePoint& x_b, RayCounter& rays) {
     BoundarySegment out;
-    const Vec3f dir = normalize(x_b.p - source.p);
+    const Vec3f dir = source.infinite ? source.d : normalize(x_b.p - source.p);
     if (!grazes(*x_b.edge, dir)) return out;
-
-    // The segment source → x_B must be clear, and its extension beyond x_B finds the receiver x_D0.
+    // Where the line through a point starts: the source, or (from infinity) beyond the scene's bounds.
+    const BoundingSphere bounds = scene.bounding_sphere();
+    auto origin = [&](const Vec3f& through) {
+        return source.infinite ? through - dir * (2.f * (bounds.radius + norm(through - bounds.center)) + 1.f) : source.p;
+    };
+    // A shadow ray from the source to `target`, stopping just short of it (from infinity: from beyond the bounds).
     Interaction3f at_source;
     at_source.p = source.p;
     at_source.n = source.n;
-    rays.rays += 2;
-    Ray to_edge = at_source.spawn_ray_to(x_b.p);
-    to_edge.tmax *= 0.999f;
-    if (scene.occluded(to_edge)) return out;
+    auto blocked = [&](const Vec3f& target) {
+        Ray ray = source.infinite ? Ray(origin(target), dir, norm(target - origin(target))) : at_source.spawn_ray_to(target);
+        ray.tmax *= 0.999f;
+        ++rays.rays;
+        return scene.occluded(ray);
+    };
+
+    // The segment source → x_B must be clear, and its extension beyond x_B finds the receiver x_D0.
+    if (blocked(x_b.p)) return out;
+    ++rays.rays;
     SurfaceInteraction3f recv = scene.intersect(Ray(x_b.p + dir * ray_offset_scale(x_b.p), dir));
     if (!recv.is_valid() || !recv.bsdf()) return out;
     const Vec3f x_d = recv.p;
@@ -101,16 +111,21 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& f
     const float delta = 1e-3f;
     const Vec3f x_b2 = x_b.a + (x_b.b - x_b.a) * std::min(1.f, x_b.tau + delta),
                 x_b1 = x_b.a + (x_b.b - x_b.a) * std::max(0.f, x_b.tau - delta);
-    const Vec3f x_d2 = line_plane(source.p, x_b2, p0, recv.n), x_d1 = line_plane(source.p, x_b1, p0, recv.n);
+    const Vec3f x_d2 = line_plane(origin(x_b2), x_b2, p0, recv.n), x_d1 = line_plane(origin(x_b1), x_b1, p0, recv.n);
     out.stretch = norm(x_d2 - x_d1) / norm(x_b2 - x_b1);
     if (!std::isfinite(out.stretch) || !(out.stretch > 0.f)) return out;
     Vec3f n = normalize(cross(recv.n, x_d2 - x_d1));
     const float eps = 1e-3f * norm(x_d2 - x_d1) / (2.f * delta) + 1e-5f;
-    Ray probe_plus = at_source.spawn_ray_to(x_d + n * eps), probe_minus = at_source.spawn_ray_to(x_d - n * eps);
-    probe_plus.tmax *= 0.999f;
-    probe_minus.tmax *= 0.999f;
-    rays.rays += 2;
-    const bool plus_dark = scene.occluded(probe_plus), minus_dark = scene.occluded(probe_minus);
+    // From infinity the probes start on the receiver (offset along its normal) and look back along −d.
+    auto probe_dark = [&](const Vec3f& target) {
+        if (!source.infinite) return blocked(target);
+        Interaction3f at;
+        at.p = target;
+        at.n = recv.n;
+        ++rays.rays;
+        return scene.occluded(at.spawn_ray(dir * -1.f));
+    };
+    const bool plus_dark = probe_dark(x_d + n * eps), minus_dark = probe_dark(x_d - n * eps);
     if (plus_dark == minus_dark) return out;
     if (!plus_dark) n = n * -1.f;
     out.dark_point = x_d + n * eps;
@@ -125,9 +140,10 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& f
     const Vec3<Var> a_t = form.position(edge_shape, x_b.edge->edge.v0), b_t = form.position(edge_shape, x_b.edge->edge.v1);
     const Vec3<Var> xb_t = a_t + (b_t - a_t) * Var(x_b.tau);
     const Vec3<Var> src_t =
-        source.shape ? form.vertex(surface_interaction<float>(*source.shape, source.prim, source.bary,
-                                                              MeshVertices{source.shape->mesh})).p
-                     : Vec3<Var>(source.p);
+        source.infinite ? xb_t - Vec3<Var>(dir)
+        : source.shape  ? form.vertex(surface_interaction<float>(*source.shape, source.prim, source.bary,
+                                                                 MeshVertices{source.shape->mesh})).p
+                        : Vec3<Var>(source.p);
     const Vec3<Var> q0 = form.position(*recv.shape, tri[0]), q1 = form.position(*recv.shape, tri[1]),
                     q2 = form.position(*recv.shape, tri[2]);
     const Vec3<Var> xd_t = line_plane(src_t, xb_t, q0, cross(q1 - q0, q2 - q0));

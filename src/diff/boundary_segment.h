@@ -44,13 +44,16 @@ EdgePoint sample_edge_point(const SceneEdges& edges, float u);
 bool grazes(const SceneEdges::SceneEdge& edge, const Vec3f& d);
 
 // The source endpoint x_S0: a point with its surface normal (zero for point lights) and, when it lies on a
-// shape, its material point (which moves with the shape).
+// shape, its material point (which moves with the shape); or, for directional and environment emitters, a
+// point at infinity: the segment's direction `d` (of travel, away from the emitter).
 struct SegmentSource {
     Vec3f p;
     Vec3f n;
     const Shape* shape = nullptr;
     uint32_t prim = 0;
     Vec2f bary;
+    bool infinite = false;
+    Vec3f d = Vec3f(0.f);
 };
 
 struct BoundarySegment {

@@ -7,8 +7,10 @@ namespace penumbra {
 
 namespace {
 
-// Incident term at x from the light point (point: I/d²; area: L_e cos_y / d²), without visibility.
+// Incident term at x from the light point, without visibility: point lights I/d², area lights L_e cos_y / d²,
+// directional lights their irradiance, environments their radiance from the sampled direction.
 Color3f incident(const Emitter& emitter, const SegmentSource& light, const Vec3f& x) {
+    if (light.infinite) return emitter.is_delta() ? emitter.eval_delta(x) : emitter.eval_environment(light.d * -1.f);
     const Vec3f d = light.p - x;
     const float dist2 = squared_norm(d);
     if (!light.shape) return emitter.eval_delta(x);
@@ -24,22 +26,30 @@ BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edg
     BoundarySample out;
     const EdgePoint x_b = sample_edge_point(edges, sampler.next_1d());
 
-    // A light point: point lights at their position, area lights by area.
+    // A light point: point lights at their position, area lights by area; directional and environment emitters
+    // give a direction (from infinity), the latter by their solid-angle density.
     float u_light = sampler.next_1d(), select_pdf = 0.f;
     const Emitter* emitter = scene.sample_emitter(u_light, select_pdf);
     const Vec2f u2 = sampler.next_2d();
-    if (!emitter || emitter->is_infinite()) return out;
+    if (!emitter) return out;
     SegmentSource light;
-    float light_pdf = select_pdf; // area density (1 for point lights) times the selection probability
+    float light_pdf = select_pdf; // area or solid-angle density (1 for delta lights) times the selection probability
     if (const Shape* shape = emitter->shape()) {
         const PositionSample3f ps = shape->sample_position(u2);
-        light = {ps.p, ps.n, shape, ps.prim, ps.bary};
+        light = {.p = ps.p, .n = ps.n, .shape = shape, .prim = ps.prim, .bary = ps.bary};
         light_pdf *= ps.pdf;
     } else {
         Interaction3f ref;
         ref.p = x_b.p;
-        light.p = emitter->sample_direction(ref, u2).first.p;
+        const DirectionSample3f ds = emitter->sample_direction(ref, u2).first;
+        if (!(ds.pdf > 0.f)) return out;
+        light.p = ds.p;
         light.n = Vec3f(0.f);
+        if (emitter->is_infinite()) {
+            light.infinite = true;
+            light.d = ds.d * -1.f;
+            if (!emitter->is_delta()) light_pdf *= ds.pdf;
+        }
     }
 
     const BoundarySegment seg = trace_boundary_segment(scene, form, light, x_b, rays);

@@ -41,7 +41,7 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
     ++rays.rays;
     SurfaceInteraction3f x_s0 = scene.intersect(Ray(x_b.p - w_b * ray_offset_scale(x_b.p), w_b * -1.f));
     if (!x_s0.is_valid() || !x_s0.bsdf() || !x_s0.bsdf()->has(BSDFSmooth)) return out;
-    const SegmentSource source{x_s0.p, x_s0.n, x_s0.shape, x_s0.prim_index, x_s0.bary};
+    const SegmentSource source{.p = x_s0.p, .n = x_s0.n, .shape = x_s0.shape, .prim = x_s0.prim_index, .bary = x_s0.bary};
     const BoundarySegment seg = trace_boundary_segment(scene, form, source, x_b, rays);
     if (!seg.valid) return out;
 
