@@ -1,5 +1,7 @@
 // Boundary terms of the differential path integral (paper 001 Eq. 19) against finite differences on the
 // validation scenes of scenes/validation/: interior + boundary must match, interior alone must visibly miss.
+#include "core/warp.h"
+#include "diff/boundary_segment.h"
 #include "diff/psdr.h"
 #include "diff_check.h"
 
@@ -141,7 +143,7 @@ TEST(DirectBoundary, TranslatingAreaLightPartlyOccluded) {
 // techniques (emitter sources with the detector subpath one bounce long; multi-directional segments from the wall
 // past the cube's edges to the floor).
 TEST(IndirectBoundary, ShadowSeenThroughAGlossyReflection) {
-    expect_boundary_matters("glossy_shadow.xml", "cube.translate=1,0,0", 2e-2, 512, 512, true, true, true, 32, "point");
+    expect_boundary_matters("glossy_shadow.xml", "cube.translate=1,0,0", 2e-2, 512, 512, true, true, true, 32, "area");
 }
 
 // The pixel-boundary term of a box filter: a checkerboard plane seen by a moving camera. The interior term alone
@@ -195,4 +197,34 @@ TEST(IndirectBoundary, ReverseModeIncludesTheBoundaryTerm) {
     o.primary_spp = o.direct_spp = 0;
     o.indirect_spp = 16;
     expect_reverse_matches_forward("glossy_shadow.xml", "cube.translate=1,0,0", o, {{"res", "24"}});
+}
+
+// The grazing directions of an edge: every sample grazes, and the density's normalization 1/pdf equals the
+// measure of the grazing set, estimated by uniform sampling of the sphere. Concave edges of a solid have none.
+TEST(IndirectBoundary, GrazingDirectionsOfAnEdge) {
+    auto scene = load_scene(validation + "self_shadow.xml", {{"res", "8"}});
+    const SceneEdges edges(*scene);
+    PCG32 rng(7);
+    int convex = 0, concave = 0;
+    for (const SceneEdges::SceneEdge& e : edges.edges) {
+        if (e.shape->id != "lshape") continue;
+        Vec3f d;
+        float pdf = 0.f;
+        if (!sample_grazing_direction(e, Vec2f(0.3f, 0.6f), d, pdf)) {
+            ++concave;
+            continue;
+        }
+        ++convex;
+        int grazing = 0;
+        const int n = 20000;
+        for (int i = 0; i < n; ++i) {
+            ASSERT_TRUE(sample_grazing_direction(e, Vec2f(rng.next_float(), rng.next_float()), d, pdf));
+            ASSERT_TRUE(grazes(e, d));
+            grazing += grazes(e, warp::square_to_uniform_sphere(Vec2f(rng.next_float(), rng.next_float())));
+        }
+        const double measure = 4.0 * M_PI * grazing / n, se = 4.0 * M_PI * std::sqrt(grazing * (1.0 - double(grazing) / n)) / n;
+        EXPECT_NEAR(1.0 / pdf, measure, 4.0 * se + 1e-3);
+    }
+    EXPECT_EQ(concave, 1) << "the L-prism has one concave edge";
+    EXPECT_GT(convex, 10);
 }

@@ -1,5 +1,6 @@
 #include "diff/boundary_segment.h"
 
+#include "core/warp.h"
 #include "scene/shape_interaction.h"
 
 #include <algorithm>
@@ -74,6 +75,36 @@ bool grazes(const SceneEdges::SceneEdge& se, const Vec3f& d) {
     if (!(dot(u0, side) * dot(u1, side) > 0.f)) return false;
     // ... and for a solid, that wedge must be the solid's (a convex edge: face 1 lies behind face 0).
     return !se.closed || dot(face_normal(m, e.f0), u1) < 0.f;
+}
+
+bool sample_grazing_direction(const SceneEdges::SceneEdge& se, const Vec2f& u, Vec3f& d, float& pdf) {
+    const Edge& e = se.edge;
+    if (e.f1 < 0) {
+        d = warp::square_to_uniform_sphere(u);
+        pdf = warp::square_to_uniform_sphere_pdf();
+        return true;
+    }
+    const TriangleMesh& m = se.shape->mesh;
+    const Vec3f a = m.positions[e.v0], b = m.positions[e.v1];
+    const Vec3f axis = normalize(b - a);
+    auto across = [&](int32_t f) {
+        const Vec3f q = opposite_vertex(m, f, a, b) - a;
+        return normalize(q - axis * dot(q, axis));
+    };
+    // Azimuths about the edge: face 0 at 0, face 1 at φ1 ∈ (−π, π); the wedge between them spans |φ1|.
+    const Vec3f u0 = across(e.f0), w = cross(axis, u0), u1 = across(e.f1);
+    const float phi1 = std::atan2(dot(u1, w), dot(u1, u0)), wedge = std::abs(phi1);
+    if (se.closed && !(dot(face_normal(m, e.f0), u1) < 0.f)) return false; // a concave edge of a solid
+    const float arc = Pi - wedge;
+    if (!(arc > 0.f)) return false;
+    // Azimuth uniform on the two arcs (wedge, π) and (wedge + π, 2π) (mirrored for φ1 < 0), height uniform.
+    const float t = u.x * 2.f * arc;
+    float psi = wedge + (t < arc ? t : t - arc + Pi);
+    if (phi1 < 0.f) psi = -psi;
+    const float z = 2.f * u.y - 1.f, r = std::sqrt(std::max(0.f, 1.f - z * z));
+    d = axis * z + (u0 * std::cos(psi) + w * std::sin(psi)) * r;
+    pdf = 1.f / (4.f * arc);
+    return true;
 }
 
 BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& form, const SegmentSource& source,

@@ -43,6 +43,12 @@ EdgePoint sample_edge_point(const SceneEdges& edges, float u);
 // edges of open meshes are tested with the faces' directions away from the edge instead (a fold of a sheet).
 bool grazes(const SceneEdges::SceneEdge& edge, const Vec3f& d);
 
+// A direction d, uniform over those that graze the edge (the line through the edge misses its faces' wedge),
+// with its solid-angle density: for a two-face edge with wedge angle φ (< π) the grazing set is the band of
+// azimuths around the edge outside the wedge and its mirror image, of measure 4(π − φ); boundary edges graze
+// along any direction (density 1/4π). False when no direction grazes (a concave edge of a solid).
+bool sample_grazing_direction(const SceneEdges::SceneEdge& edge, const Vec2f& u, Vec3f& d, float& pdf);
+
 // The source endpoint x_S0: a point with its surface normal (zero for point lights) and, when it lies on a
 // shape, its material point (which moves with the shape); or, for directional and environment emitters, a
 // point at infinity: the segment's direction `d` (of travel, away from the emitter).

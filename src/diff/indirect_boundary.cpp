@@ -1,6 +1,5 @@
 #include "diff/indirect_boundary.h"
 
-#include "core/warp.h"
 #include "diff/detector_subpath.h"
 #include "diff/direct_boundary.h"
 
@@ -34,8 +33,9 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
     const int t_max = max_detector_depth(settings, 2);
     if (settings.max_depth >= 0 && t_max < 0) return out;
     const EdgePoint x_b = sample_edge_point(edges, sampler.next_1d());
-    const Vec3f w_b = warp::square_to_uniform_sphere(sampler.next_2d());
-    if (!grazes(*x_b.edge, w_b)) return out;
+    Vec3f w_b;
+    float pdf_w;
+    if (!sample_grazing_direction(*x_b.edge, sampler.next_2d(), w_b, pdf_w)) return out;
 
     // x_S0: the first surface behind x_B along −ω_B.
     ++rays.rays;
@@ -52,8 +52,7 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
     // G(x_S0, x_D0) times the Jacobian of Eq. 40 over the density of (x_B, ω_B):
     //   |cos φ_S| |cos φ_D| / r² · r_S² / |cos φ_S| · stretch = |cos φ_D| r_S² stretch / r².
     const float r_s2 = squared_norm(x_b.p - x_s0.p), r2 = squared_norm(seg.receiver.p - x_s0.p);
-    const float factor =
-        seg.cos_receiver * r_s2 * seg.stretch / r2 * edges.total_length / warp::square_to_uniform_sphere_pdf();
+    const float factor = seg.cos_receiver * r_s2 * seg.stretch / r2 * edges.total_length / pdf_w;
 
     // The source subpath: one estimate per path-length budget the connections need (all from the same
     // random numbers; each is unbiased for its budget).

@@ -3,8 +3,8 @@
 // segment seen directly by the camera (diff/direct_boundary.h). Two techniques, each with the full budget:
 //  - emitter sources: an emitter sample and an edge point, with the detector subpath's camera connections
 //    at depths t ≥ 1 (e.g. a shadow seen in a glossy reflection; the only way to reach point lights);
-//  - multi-directional sampling: an edge point x_B and a direction ω_B (uniform on the sphere), the first
-//    surfaces behind (x_S0) and beyond (x_D0) the edge, the Jacobian of Eq. 40
+//  - multi-directional sampling: an edge point x_B and a direction ω_B (uniform over the directions grazing the
+//    edge), the first surfaces behind (x_S0) and beyond (x_D0) the edge, the Jacobian of Eq. 40
 //        dA(x_S0) dℓ(x_D0) / (dℓ(x_B) dσ(ω_B)) = r_S² / |cos φ_S| · dℓ(x_D0)/dℓ(x_B),
 //    the radiance x_S0 reflects toward x_D0 (the source subpath, by path tracing with next-event estimation;
 //    its emission is the emitter technique's) and the detector subpath's camera connections at all depths.
