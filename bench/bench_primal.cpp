@@ -6,6 +6,7 @@
 #include "core/rng.h"
 #include "core/warp.h"
 #include "diff/interior.h"
+#include "diff/psdr.h"
 #include "render/render.h"
 #include "scene/scene.h"
 
@@ -247,7 +248,39 @@ void BM_Derivative(benchmark::State& state) {
     state.counters["samples/s"] = samples / seconds;
 }
 
+// The boundary terms along the same translation, one sample per pixel each (edge sets prepared once, outside
+// the timed loop): time per boundary sample relative to a primal sample.
+double g_boundary_seconds_per_sample[3] = {0, 0, 0};
+const char* const BoundaryTermNames[3] = {"primary", "direct", "indirect"};
+
+void BM_Boundary(benchmark::State& state) {
+    const int term = int(state.range(0));
+    Parameters params(scene());
+    params.enable({{scene().shapes[0]->id.empty() ? "shape_0.translate" : scene().shapes[0]->id + ".translate", {0, 1, 0}}});
+    const Film& film = *scene().sensor->film;
+    BoundaryOptions o;
+    o.samples_per_pixel = 1;
+    o.path = path_settings(scene());
+    const PrimaryBoundary primary(scene());
+    const DirectBoundary direct(scene());
+    const IndirectBoundary indirect(scene());
+    double seconds = 0, samples = 0;
+    for (auto _ : state) {
+        const auto start = std::chrono::steady_clock::now();
+        const Image d = term == 0 ? primary.derivative(params, o)
+                        : term == 1 ? direct.derivative(params, o)
+                                    : indirect.derivative(params, o);
+        benchmark::DoNotOptimize(d.pixels.data());
+        seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        samples += double(film.width) * film.height * o.samples_per_pixel;
+    }
+    g_boundary_seconds_per_sample[term] = seconds / samples;
+    state.SetLabel(BoundaryTermNames[term]);
+    state.counters["samples/s"] = samples / seconds;
+}
+
 BENCHMARK(BM_Derivative)->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
+BENCHMARK(BM_Boundary)->DenseRange(0, 2)->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
 BENCHMARK(BM_Gradient)->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
 BENCHMARK_CAPTURE(BM_RawEmbree, surface_incoherent, RayWorkload::Surface, &g_surface_rays_per_s)
     ->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
@@ -273,6 +306,10 @@ int main(int argc, char** argv) {
     if (g_primal_seconds_per_sample > 0 && g_derivative_seconds_per_sample > 0)
         std::printf("forward-mode derivative pass / primal pass, time per sample = %.2f\n",
                     g_derivative_seconds_per_sample / g_primal_seconds_per_sample);
+    for (int term = 0; term < 3; ++term)
+        if (g_primal_seconds_per_sample > 0 && g_boundary_seconds_per_sample[term] > 0)
+            std::printf("%s boundary sample / primal sample, time = %.2f\n", BoundaryTermNames[term],
+                        g_boundary_seconds_per_sample[term] / g_primal_seconds_per_sample);
     benchmark::Shutdown();
     return 0;
 }
