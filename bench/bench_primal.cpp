@@ -261,15 +261,15 @@ void BM_Boundary(benchmark::State& state) {
     BoundaryOptions o;
     o.samples_per_pixel = 1;
     o.path = path_settings(scene());
-    const PrimaryBoundary primary(scene());
-    const DirectBoundary direct(scene());
-    const IndirectBoundary indirect(scene());
+    const SceneEdges edges(scene());
+    const PrimaryBoundary primary(scene(), edges);
+    const DirectBoundary direct(scene(), edges);
+    const IndirectBoundary indirect(scene(), edges);
+    const BoundaryTerm* const terms[3] = {&primary, &direct, &indirect};
     double seconds = 0, samples = 0;
     for (auto _ : state) {
         const auto start = std::chrono::steady_clock::now();
-        const Image d = term == 0 ? primary.derivative(params, o)
-                        : term == 1 ? direct.derivative(params, o)
-                                    : indirect.derivative(params, o);
+        const Image d = terms[term]->derivative(params, o);
         benchmark::DoNotOptimize(d.pixels.data());
         seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         samples += double(film.width) * film.height * o.samples_per_pixel;

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 namespace penumbra::test {
 
@@ -81,6 +82,23 @@ inline Image with_detection_limit(const FiniteDifference& fd, const Image& prima
                     err.at(x, y)[k] = float(jump[k] / (2.0 * h * samples));
         }
     return err;
+}
+
+// The dot-product test of forward against reverse mode on the same samples: ⟨a, Jv⟩ (adjoint · derivative image)
+// and ⟨Jᵀa, v⟩ (gradient · direction), with Σ|a_k (Jv)_k| as the scale of their rounding differences.
+struct AdjointPair {
+    double forward = 0, reverse = 0, scale = 0;
+};
+inline AdjointPair adjoint_pair(const Image& adjoint, const Image& derivative, const std::vector<double>& gradient,
+                                const std::vector<float>& direction) {
+    AdjointPair p;
+    for (size_t i = 0; i < adjoint.pixels.size(); ++i)
+        for (int k = 0; k < 3; ++k) {
+            p.forward += double(adjoint.pixels[i][k]) * derivative.pixels[i][k];
+            p.scale += std::abs(double(adjoint.pixels[i][k]) * derivative.pixels[i][k]);
+        }
+    for (size_t k = 0; k < direction.size(); ++k) p.reverse += gradient[k] * direction[k];
+    return p;
 }
 
 inline std::string describe(const DiffCheck& c) {

@@ -43,6 +43,17 @@ struct BoundarySample {
     }
 };
 
+// A boundary term of the differential path integral: an estimator with its own sample budget.
+class BoundaryTerm {
+public:
+    virtual ~BoundaryTerm() = default;
+    // Forward mode: the term's contribution to dI/dθ.
+    virtual Image derivative(const Parameters& params, const BoundaryOptions& options) const = 0;
+    // Reverse mode: adds Σ_pixels adjoint · (the term) to `gradient`.
+    virtual void gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
+                          std::vector<double>& gradient) const = 0;
+};
+
 namespace detail {
 
 template <typename Body> void for_each_sample(const Film& film, const BoundaryOptions& options, uint64_t salt, const Body& body) {

@@ -50,11 +50,6 @@ Vec3f opposite_vertex(const TriangleMesh& m, int32_t f, const Vec3f& a, const Ve
     return best;
 }
 
-Vec3f face_normal(const TriangleMesh& m, int32_t f) {
-    const uint32_t* i = &m.indices[3 * size_t(f)];
-    return cross(m.positions[i[1]] - m.positions[i[0]], m.positions[i[2]] - m.positions[i[0]]);
-}
-
 // Intersection of the line from `from` through `through` with the plane (p0, n).
 template <typename V> V line_plane(const V& from, const V& through, const V& p0, const V& n) {
     const V d = through - from;

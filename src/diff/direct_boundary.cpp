@@ -70,24 +70,21 @@ constexpr uint64_t Salt = 0x94D049BB133111EBULL;
 
 } // namespace
 
-DirectBoundary::DirectBoundary(const Scene& scene) : scene_(scene), edges_(std::make_unique<SceneEdges>(scene)) {}
-DirectBoundary::~DirectBoundary() = default;
-
 Image DirectBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
-    if (edges_->empty() || scene_.emitters.empty())
+    if (edges_.empty() || scene_.emitters.empty())
         return Image(scene_.sensor->film->width, scene_.sensor->film->height);
     const MaterialForm form(params);
     return boundary_derivative(scene_, params, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
-        return sample_emitter_boundary(scene_, *edges_, form, 0, 0, options.path, sampler, rays);
+        return sample_emitter_boundary(scene_, edges_, form, 0, 0, options.path, sampler, rays);
     });
 }
 
 void DirectBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
                               std::vector<double>& gradient) const {
-    if (edges_->empty() || scene_.emitters.empty()) return;
+    if (edges_.empty() || scene_.emitters.empty()) return;
     const MaterialForm form(params);
     boundary_gradient(scene_, adjoint, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
-        return sample_emitter_boundary(scene_, *edges_, form, 0, 0, options.path, sampler, rays);
+        return sample_emitter_boundary(scene_, edges_, form, 0, 0, options.path, sampler, rays);
     }, gradient);
 }
 

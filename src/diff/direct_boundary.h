@@ -10,7 +10,6 @@
 #include "diff/boundary_driver.h"
 #include "diff/boundary_segment.h"
 
-#include <memory>
 
 namespace penumbra {
 
@@ -20,20 +19,17 @@ namespace penumbra {
 BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edges, const MaterialForm& form, int t_min,
                                        int t_max, const PathSettings& settings, Sampler& sampler, RayCounter& rays);
 
-class DirectBoundary {
+class DirectBoundary final : public BoundaryTerm {
 public:
-    // Collects the scene's discontinuity edges (once; they depend only on the scene).
-    explicit DirectBoundary(const Scene& scene);
-    ~DirectBoundary();
-    // Forward mode: the direct boundary term's contribution to dI/dθ.
-    Image derivative(const Parameters& params, const BoundaryOptions& options) const;
-    // Reverse mode: adds Σ_pixels adjoint · (direct boundary term) to `gradient`.
+    // `edges` (the scene's discontinuity edges) must outlive the estimator.
+    DirectBoundary(const Scene& scene, const SceneEdges& edges) : scene_(scene), edges_(edges) {}
+    Image derivative(const Parameters& params, const BoundaryOptions& options) const override;
     void gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
-                  std::vector<double>& gradient) const;
+                  std::vector<double>& gradient) const override;
 
 private:
     const Scene& scene_;
-    std::unique_ptr<const SceneEdges> edges_;
+    const SceneEdges& edges_;
 };
 
 } // namespace penumbra

@@ -6,12 +6,12 @@
 
 namespace penumbra {
 
-namespace {
-
-Vec3f face_normal_unnormalized(const TriangleMesh& m, int32_t f) {
+Vec3f face_normal(const TriangleMesh& m, int32_t f) {
     const uint32_t* i = &m.indices[3 * size_t(f)];
     return cross(m.positions[i[1]] - m.positions[i[0]], m.positions[i[2]] - m.positions[i[0]]);
 }
+
+namespace {
 
 // A canonical id per distinct position, so that seams with duplicated vertices still connect their faces.
 std::vector<uint32_t> position_ids(const TriangleMesh& m) {
@@ -52,7 +52,7 @@ std::vector<Edge> discontinuity_edges(const TriangleMesh& mesh) {
         if (j - i == 1) {
             edges.push_back({h.v0, h.v1, h.face, -1});
         } else if (j - i == 2) {
-            const Vec3f n0 = face_normal_unnormalized(mesh, h.face), n1 = face_normal_unnormalized(mesh, halves[i + 1].face);
+            const Vec3f n0 = face_normal(mesh, h.face), n1 = face_normal(mesh, halves[i + 1].face);
             const float c = dot(n0, n1) / std::sqrt(squared_norm(n0) * squared_norm(n1));
             if (!(c > 1.f - 1e-6f)) edges.push_back({h.v0, h.v1, h.face, halves[i + 1].face});
         } else {
@@ -67,14 +67,14 @@ std::vector<Edge> discontinuity_edges(const TriangleMesh& mesh) {
 bool is_silhouette(const TriangleMesh& mesh, const Edge& e, const Vec3f& eye) {
     if (e.f1 < 0) return true;
     const Vec3f to_eye = eye - mesh.positions[e.v0];
-    return (dot(face_normal_unnormalized(mesh, e.f0), to_eye) > 0.f) !=
-           (dot(face_normal_unnormalized(mesh, e.f1), to_eye) > 0.f);
+    return (dot(face_normal(mesh, e.f0), to_eye) > 0.f) !=
+           (dot(face_normal(mesh, e.f1), to_eye) > 0.f);
 }
 
 bool is_silhouette_parallel(const TriangleMesh& mesh, const Edge& e, const Vec3f& forward) {
     if (e.f1 < 0) return true;
-    return (dot(face_normal_unnormalized(mesh, e.f0), forward) < 0.f) !=
-           (dot(face_normal_unnormalized(mesh, e.f1), forward) < 0.f);
+    return (dot(face_normal(mesh, e.f0), forward) < 0.f) !=
+           (dot(face_normal(mesh, e.f1), forward) < 0.f);
 }
 
 } // namespace penumbra

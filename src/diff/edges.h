@@ -12,6 +12,9 @@ struct Edge {
     int32_t f0, f1;    // adjacent faces (f1 = -1 for a boundary edge)
 };
 
+// The (unnormalized) geometric normal of face f: (p1 − p0) × (p2 − p0).
+Vec3f face_normal(const TriangleMesh& mesh, int32_t f);
+
 // Edges of a mesh, merged by position (meshes often duplicate vertices along uv seams and hard edges).
 std::vector<Edge> discontinuity_edges(const TriangleMesh& mesh);
 

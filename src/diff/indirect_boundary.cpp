@@ -75,23 +75,20 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
 
 } // namespace
 
-IndirectBoundary::IndirectBoundary(const Scene& scene) : scene_(scene), edges_(std::make_unique<SceneEdges>(scene)) {}
-IndirectBoundary::~IndirectBoundary() = default;
-
 Image IndirectBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
     const Film& film = *scene_.sensor->film;
     Image result(film.width, film.height);
-    if (edges_->empty()) return result;
+    if (edges_.empty()) return result;
     const MaterialForm form(params);
     const int t_max = max_detector_depth(options.path, 1);
     if (!scene_.emitters.empty() && (t_max < 0 || t_max >= 1)) {
         result = boundary_derivative(scene_, params, options, EmitterSalt, [&](Sampler& sampler, RayCounter& rays) {
-            return sample_emitter_boundary(scene_, *edges_, form, 1, t_max, options.path, sampler, rays);
+            return sample_emitter_boundary(scene_, edges_, form, 1, t_max, options.path, sampler, rays);
         });
     }
     const Image directional =
         boundary_derivative(scene_, params, options, DirectionalSalt, [&](Sampler& sampler, RayCounter& rays) {
-            return sample_directional(scene_, *edges_, form, options.path, sampler, rays);
+            return sample_directional(scene_, edges_, form, options.path, sampler, rays);
         });
     for (size_t i = 0; i < result.pixels.size(); ++i) result.pixels[i] += directional.pixels[i];
     return result;
@@ -99,16 +96,16 @@ Image IndirectBoundary::derivative(const Parameters& params, const BoundaryOptio
 
 void IndirectBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
                                 std::vector<double>& gradient) const {
-    if (edges_->empty()) return;
+    if (edges_.empty()) return;
     const MaterialForm form(params);
     const int t_max = max_detector_depth(options.path, 1);
     if (!scene_.emitters.empty() && (t_max < 0 || t_max >= 1)) {
         boundary_gradient(scene_, adjoint, options, EmitterSalt, [&](Sampler& sampler, RayCounter& rays) {
-            return sample_emitter_boundary(scene_, *edges_, form, 1, t_max, options.path, sampler, rays);
+            return sample_emitter_boundary(scene_, edges_, form, 1, t_max, options.path, sampler, rays);
         }, gradient);
     }
     boundary_gradient(scene_, adjoint, options, DirectionalSalt, [&](Sampler& sampler, RayCounter& rays) {
-        return sample_directional(scene_, *edges_, form, options.path, sampler, rays);
+        return sample_directional(scene_, edges_, form, options.path, sampler, rays);
     }, gradient);
 }
 

@@ -13,23 +13,20 @@
 #include "diff/boundary_driver.h"
 #include "diff/boundary_segment.h"
 
-#include <memory>
 
 namespace penumbra {
 
-class IndirectBoundary {
+class IndirectBoundary final : public BoundaryTerm {
 public:
-    explicit IndirectBoundary(const Scene& scene);
-    ~IndirectBoundary();
-    // Forward mode: the indirect boundary term's contribution to dI/dθ.
-    Image derivative(const Parameters& params, const BoundaryOptions& options) const;
-    // Reverse mode: adds Σ_pixels adjoint · (indirect boundary term) to `gradient`.
+    // `edges` (the scene's discontinuity edges) must outlive the estimator.
+    IndirectBoundary(const Scene& scene, const SceneEdges& edges) : scene_(scene), edges_(edges) {}
+    Image derivative(const Parameters& params, const BoundaryOptions& options) const override;
     void gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
-                  std::vector<double>& gradient) const;
+                  std::vector<double>& gradient) const override;
 
 private:
     const Scene& scene_;
-    std::unique_ptr<const SceneEdges> edges_;
+    const SceneEdges& edges_;
 };
 
 } // namespace penumbra

@@ -15,14 +15,13 @@ namespace penumbra {
 // Whether the scene's film needs the pixel-boundary term (a box filter).
 bool needs_pixel_boundary(const Scene& scene);
 
-class PixelBoundary {
+class PixelBoundary final : public BoundaryTerm {
 public:
     explicit PixelBoundary(const Scene& scene) : scene_(scene) {}
-    // Forward mode: the pixel-boundary term's contribution to dI/dθ.
-    Image derivative(const Parameters& params, const BoundaryOptions& options) const;
-    // Reverse mode: adds Σ_pixels adjoint · (pixel-boundary term) to `gradient`.
+    // Both are zero (and cost nothing) unless the film has a box filter.
+    Image derivative(const Parameters& params, const BoundaryOptions& options) const override;
     void gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
-                  std::vector<double>& gradient) const;
+                  std::vector<double>& gradient) const override;
 
 private:
     const Scene& scene_;

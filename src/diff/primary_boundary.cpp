@@ -1,7 +1,6 @@
 #include "diff/primary_boundary.h"
 
 #include "core/distribution.h"
-#include "diff/edges.h"
 #include "diff/material_form.h"
 
 #include <algorithm>
@@ -26,7 +25,7 @@ namespace {
 
 using Silhouettes = PrimaryBoundary::Silhouettes;
 
-std::unique_ptr<const Silhouettes> find_silhouettes(const Scene& scene) {
+std::unique_ptr<const Silhouettes> find_silhouettes(const Scene& scene, const SceneEdges& edges) {
     const Sensor& sensor = *scene.sensor;
     const bool parallel = sensor.plugin == "orthographic";
     const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
@@ -34,20 +33,19 @@ std::unique_ptr<const Silhouettes> find_silhouettes(const Scene& scene) {
     auto result = std::make_unique<Silhouettes>();
     Silhouettes& out = *result;
     std::vector<float> lengths;
-    for (const auto& shape : scene.shapes) {
-        const TriangleMesh& m = shape->mesh;
-        for (const Edge& e : discontinuity_edges(m)) {
-            if (parallel ? !is_silhouette_parallel(m, e, forward) : !is_silhouette(m, e, eye)) continue;
-            const Vec3f p0 = m.positions[e.v0], p1 = m.positions[e.v1];
-            Vec2f s0, s1;
-            float j;
-            if (!sensor.film_position(p0, forward, s0, j) || !sensor.film_position(p1, forward, s1, j)) continue;
-            const float length = std::sqrt(sqr(s1.x - s0.x) + sqr(s1.y - s0.y));
-            if (!(length > 0.f) || !std::isfinite(length)) continue;
-            out.edges.push_back({shape.get(), e, s0, s1, dot(p0 - eye, forward), dot(p1 - eye, forward)});
-            lengths.push_back(length);
-            out.total_length += length;
-        }
+    for (const SceneEdges::SceneEdge& se : edges.edges) {
+        const TriangleMesh& m = se.shape->mesh;
+        const Edge& e = se.edge;
+        if (parallel ? !is_silhouette_parallel(m, e, forward) : !is_silhouette(m, e, eye)) continue;
+        const Vec3f p0 = m.positions[e.v0], p1 = m.positions[e.v1];
+        Vec2f s0, s1;
+        float j;
+        if (!sensor.film_position(p0, forward, s0, j) || !sensor.film_position(p1, forward, s1, j)) continue;
+        const float length = std::sqrt(sqr(s1.x - s0.x) + sqr(s1.y - s0.y));
+        if (!(length > 0.f) || !std::isfinite(length)) continue;
+        out.edges.push_back({se.shape, e, s0, s1, dot(p0 - eye, forward), dot(p1 - eye, forward)});
+        lengths.push_back(length);
+        out.total_length += length;
     }
     if (!lengths.empty()) out.by_length = DiscreteDistribution(lengths);
     return result;
@@ -121,7 +119,8 @@ constexpr uint64_t Salt = 0xB5AD4ECEDA1CE2A9ULL;
 
 } // namespace
 
-PrimaryBoundary::PrimaryBoundary(const Scene& scene) : scene_(scene), silhouettes_(find_silhouettes(scene)) {}
+PrimaryBoundary::PrimaryBoundary(const Scene& scene, const SceneEdges& edges)
+    : scene_(scene), silhouettes_(find_silhouettes(scene, edges)) {}
 PrimaryBoundary::~PrimaryBoundary() = default;
 
 Image PrimaryBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {

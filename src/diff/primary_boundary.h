@@ -8,21 +8,20 @@
 #pragma once
 #include "core/image.h"
 #include "diff/boundary_driver.h"
+#include "diff/boundary_segment.h"
 
 #include <memory>
 
 namespace penumbra {
 
-class PrimaryBoundary {
+class PrimaryBoundary final : public BoundaryTerm {
 public:
-    // Finds the silhouette edges seen from the reference camera (once; they depend only on the scene).
-    explicit PrimaryBoundary(const Scene& scene);
-    ~PrimaryBoundary();
-    // Forward mode: the primary boundary term's contribution to dI/dθ.
-    Image derivative(const Parameters& params, const BoundaryOptions& options) const;
-    // Reverse mode: adds Σ_pixels adjoint · (primary boundary term) to `gradient`.
+    // Selects, among the scene's discontinuity edges, the silhouettes seen from the reference camera.
+    PrimaryBoundary(const Scene& scene, const SceneEdges& edges);
+    ~PrimaryBoundary() override;
+    Image derivative(const Parameters& params, const BoundaryOptions& options) const override;
     void gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
-                  std::vector<double>& gradient) const;
+                  std::vector<double>& gradient) const override;
 
     struct Silhouettes; // the prepared edges (defined in the .cpp)
 

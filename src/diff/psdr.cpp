@@ -2,17 +2,18 @@
 
 #include "core/batch_stats.h"
 
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <utility>
 
 namespace penumbra {
 
 namespace {
 
-// Mean and standard error over batches of a boundary estimator (run with independent seeds).
-template <typename Estimator>
-void boundary_batches(const Scene& scene, const PsdrOptions& options, int spp, uint64_t salt, const Estimator& estimate,
-                      Image& mean, Image& stderr_img) {
+// Mean and standard error over batches of a boundary term (run with independent seeds).
+void boundary_batches(const Scene& scene, const Parameters& params, const PsdrOptions& options, const BoundaryTerm& term,
+                      int spp, uint64_t salt, Image& mean, Image& stderr_img) {
     const Film& film = *scene.sensor->film;
     const int B = options.interior.batches;
     mean = Image(film.width, film.height);
@@ -25,46 +26,72 @@ void boundary_batches(const Scene& scene, const PsdrOptions& options, int spp, u
         bo.seed = options.interior.seed + salt * uint64_t(b + 1);
         bo.threads = options.interior.threads;
         bo.path = options.interior.path;
-        batches.add(estimate(bo));
+        batches.add(term.derivative(params, bo));
     }
     mean = batches.mean();
     if (B > 1) stderr_img = batches.standard_error();
 }
 
-constexpr uint64_t PrimarySalt = 0x2545F4914F6CDD1DULL, DirectSalt = 0x9FB21C651E98DF25ULL,
-                   IndirectSalt = 0xC2B2AE3D27D4EB4FULL, PixelSalt = 0x165667B19E3779F9ULL;
+// The boundary terms of a scene with their budgets and seeds; the discontinuity edges are collected once.
+class BoundaryTerms {
+public:
+    struct Term {
+        const BoundaryTerm& estimator;
+        int spp;
+        uint64_t salt;
+    };
+
+    BoundaryTerms(const Scene& scene, const PsdrOptions& options)
+        : edges_(scene), primary_(scene, edges_), direct_(scene, edges_), indirect_(scene, edges_), pixel_(scene),
+          terms_{{{primary_, options.primary_spp, 0x2545F4914F6CDD1DULL},
+                  {direct_, options.direct_spp, 0x9FB21C651E98DF25ULL},
+                  {indirect_, options.indirect_spp, 0xC2B2AE3D27D4EB4FULL},
+                  {pixel_, options.pixel_spp, 0x165667B19E3779F9ULL}}} {}
+
+    // In the order of PsdrDerivative's images: primary, direct, indirect, pixel.
+    const std::array<Term, 4>& terms() const { return terms_; }
+
+private:
+    SceneEdges edges_;
+    PrimaryBoundary primary_;
+    DirectBoundary direct_;
+    IndirectBoundary indirect_;
+    PixelBoundary pixel_;
+    std::array<Term, 4> terms_;
+};
 
 } // namespace
 
 PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, const PsdrOptions& options) {
     PsdrDerivative out;
     out.interior = render_derivative(scene, params, options.interior);
-    boundary_batches(scene, options, options.primary_spp, PrimarySalt,
-                     [&, primary = PrimaryBoundary(scene)](const BoundaryOptions& bo) { return primary.derivative(params, bo); },
-                     out.primary, out.primary_stderr);
-    boundary_batches(scene, options, options.direct_spp, DirectSalt,
-                     [&, direct = DirectBoundary(scene)](const BoundaryOptions& bo) { return direct.derivative(params, bo); },
-                     out.direct, out.direct_stderr);
-    boundary_batches(scene, options, options.indirect_spp, IndirectSalt,
-                     [&, indirect = IndirectBoundary(scene)](const BoundaryOptions& bo) { return indirect.derivative(params, bo); },
-                     out.indirect, out.indirect_stderr);
-    boundary_batches(scene, options, needs_pixel_boundary(scene) ? options.pixel_spp : 0, PixelSalt,
-                     [&, pixel = PixelBoundary(scene)](const BoundaryOptions& bo) { return pixel.derivative(params, bo); },
-                     out.pixel, out.pixel_stderr);
+    const BoundaryTerms boundary(scene, options);
+    const std::array<std::pair<Image*, Image*>, 4> images = {{{&out.primary, &out.primary_stderr},
+                                                              {&out.direct, &out.direct_stderr},
+                                                              {&out.indirect, &out.indirect_stderr},
+                                                              {&out.pixel, &out.pixel_stderr}}};
+    for (size_t k = 0; k < images.size(); ++k) {
+        const BoundaryTerms::Term& t = boundary.terms()[k];
+        boundary_batches(scene, params, options, t.estimator, t.spp, t.salt, *images[k].first, *images[k].second);
+    }
     const Film& film = *scene.sensor->film;
-    out.total = Image(film.width, film.height);
+    out.total = out.interior.derivative;
     const bool have_se = options.interior.batches > 1;
     if (have_se) out.total_stderr = Image(film.width, film.height);
     for (size_t i = 0; i < out.total.pixels.size(); ++i) {
-        out.total.pixels[i] = out.interior.derivative.pixels[i] + out.primary.pixels[i] + out.direct.pixels[i] +
-                              out.indirect.pixels[i] + out.pixel.pixels[i];
-        if (have_se) {
-            // The estimators use independent samples: variances add.
-            const Vec3d a(out.interior.stderr_img.pixels[i]), b(out.primary_stderr.pixels[i]), c(out.direct_stderr.pixels[i]),
-                d(out.indirect_stderr.pixels[i]), e(out.pixel_stderr.pixels[i]);
-            const Vec3d v = a * a + b * b + c * c + d * d + e * e;
-            out.total_stderr.pixels[i] = Color3f(float(std::sqrt(v.x)), float(std::sqrt(v.y)), float(std::sqrt(v.z)));
+        const Vec3d s(out.interior.stderr_img.pixels.empty() ? Color3f(0.f) : out.interior.stderr_img.pixels[i]);
+        Vec3d variance = s * s;
+        for (const auto& [mean, stderr_img] : images) {
+            out.total.pixels[i] += mean->pixels[i];
+            if (have_se) {
+                // The estimators use independent samples: variances add.
+                const Vec3d e(stderr_img->pixels[i]);
+                variance += e * e;
+            }
         }
+        if (have_se)
+            out.total_stderr.pixels[i] =
+                Color3f(float(std::sqrt(variance.x)), float(std::sqrt(variance.y)), float(std::sqrt(variance.z)));
     }
     return out;
 }
@@ -75,25 +102,12 @@ Gradient psdr_gradient(const Scene& scene, const Parameters& params, const Image
     BoundaryOptions bo;
     bo.threads = options.interior.threads;
     bo.path = options.interior.path;
-    if (options.primary_spp > 0) {
-        bo.samples_per_pixel = options.primary_spp;
-        bo.seed = options.interior.seed + PrimarySalt;
-        PrimaryBoundary(scene).gradient(params, adjoint, bo, g.values);
-    }
-    if (options.direct_spp > 0) {
-        bo.samples_per_pixel = options.direct_spp;
-        bo.seed = options.interior.seed + DirectSalt;
-        DirectBoundary(scene).gradient(params, adjoint, bo, g.values);
-    }
-    if (options.indirect_spp > 0) {
-        bo.samples_per_pixel = options.indirect_spp;
-        bo.seed = options.interior.seed + IndirectSalt;
-        IndirectBoundary(scene).gradient(params, adjoint, bo, g.values);
-    }
-    if (options.pixel_spp > 0 && needs_pixel_boundary(scene)) {
-        bo.samples_per_pixel = options.pixel_spp;
-        bo.seed = options.interior.seed + PixelSalt;
-        PixelBoundary(scene).gradient(params, adjoint, bo, g.values);
+    const BoundaryTerms boundary(scene, options);
+    for (const BoundaryTerms::Term& t : boundary.terms()) {
+        if (t.spp <= 0) continue;
+        bo.samples_per_pixel = t.spp;
+        bo.seed = options.interior.seed + t.salt;
+        t.estimator.gradient(params, adjoint, bo, g.values);
     }
     g.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return g;
