@@ -10,6 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <chrono>
 #include <filesystem>
@@ -22,6 +24,7 @@ namespace {
 struct Common {
     std::string scene;
     std::string method = "psdr";
+    std::string first_vertex = "auto";
     int boundary_spp = 4;
     std::vector<std::string> defines, params;
     int spp = 64, threads = 0, batches = 0;
@@ -54,6 +57,11 @@ void add_method(CLI::App* cmd, Common& c) {
                     "methods of paper 002, non-geometric parameters only)")
         ->check(CLI::IsMember({"interior", "psdr", "paths"}));
     cmd->add_option("--boundary-spp", c.boundary_spp, "samples per pixel of each boundary term")->check(CLI::NonNegativeNumber);
+    cmd->add_option("--first-vertex", c.first_vertex,
+                    "parameterization of the vertex the camera sees: image (fixed camera rays; needs a static camera), "
+                    "material (material points; the filter and pixel edges move) or auto (image unless the camera "
+                    "moves or a moving surface has a checkerboard/nearest texture)")
+        ->check(CLI::IsMember({"auto", "image", "material"}));
     cmd->add_option("--sampling", c.sampling, "--method paths: differential (differential vertex sampling) or bsdf")
         ->check(CLI::IsMember({"differential", "bsdf"}));
     cmd->add_option("--q", c.q, "--method paths: probability that a vertex becomes the differential vertex (default 0.5)")
@@ -94,6 +102,7 @@ PsdrOptions psdr_options(const Scene& scene, const Common& c, int batches, bool 
     o.interior.threads = c.threads;
     o.interior.antithetic = antithetic;
     o.interior.path = path_settings(scene);
+    o.interior.first_vertex = parse_first_vertex(c.first_vertex);
     o.primary_spp = c.method == "psdr" && c.boundary_spp > 0 ? std::max(1, c.boundary_spp / batches) : 0;
     o.direct_spp = o.primary_spp;
     o.indirect_spp = o.primary_spp;
@@ -181,7 +190,7 @@ void cmd_derivative(const Common& c, bool no_antithetic) {
         if (total) write_signed(c.terms_prefix + "_primary" + lower_extension(c.output), d.primary);
         if (total) write_signed(c.terms_prefix + "_direct" + lower_extension(c.output), d.direct);
         if (total) write_signed(c.terms_prefix + "_indirect" + lower_extension(c.output), d.indirect);
-        if (total && needs_pixel_boundary(*scene)) write_signed(c.terms_prefix + "_pixel" + lower_extension(c.output), d.pixel);
+        if (total && needs_pixel_boundary(*scene, params, o.interior.first_vertex)) write_signed(c.terms_prefix + "_pixel" + lower_extension(c.output), d.pixel);
     }
     const Film& film = *scene->sensor->film;
     std::fprintf(stderr, "derivative (%s) %dx%d at %d spp%s in %.2f s, mean %.6g -> %s\n",
@@ -267,16 +276,44 @@ void cmd_gradient(const Common& c) {
                  g.seconds, c.output.empty() ? "" : " -> ", c.output.c_str());
 }
 
-void cmd_compare(const std::string& test, const std::string& ref, const std::string& test_se, const std::string& ref_se) {
+// Per pixel (D − R) / sqrt(σ_D² + σ_R²), as a diverging colormap (saturated at ±4).
+void write_z_map(const std::string& path, const Image& a, const Image& b, const Image& sa, const Image& sb) {
+    Image z(a.width, a.height);
+    for (size_t i = 0; i < z.pixels.size(); ++i)
+        for (int k = 0; k < 3; ++k) {
+            const float s = std::hypot(sa.pixels.empty() ? 0.f : sa.pixels[i][k], sb.pixels.empty() ? 0.f : sb.pixels[i][k]);
+            const float d = a.pixels[i][k] - b.pixels[i][k];
+            z.pixels[i][k] = s > 0.f ? std::clamp(d / s, -4.f, 4.f) : (d == 0.f ? 0.f : std::copysign(4.f, d));
+        }
+    if (lower_extension(path) == ".png") write_image(path, diverging_colormap(z, 4.f));
+    else write_image(path, z);
+}
+
+void cmd_compare(const std::string& test, const std::string& ref, const std::string& test_se, const std::string& ref_se,
+                 const std::string& z_map) {
     const Image a = read_image(test, false), b = read_image(ref, false);
     const Image sa = test_se.empty() ? Image() : read_image(test_se, false);
     const Image sb = ref_se.empty() ? Image() : read_image(ref_se, false);
     const Comparison c = compare_images(a, b, sa, sb);
+    const Comparison c4 = compare_images(block_average(a, 4), block_average(b, 4), block_average_stderr(sa, 4),
+                                         block_average_stderr(sb, 4));
     std::printf("relerr = %.6f   (Σ|D−R| / Σ|R| over %dx%d pixels)\n", c.relerr, a.width, a.height);
+    std::printf("relerr4 = %.6f   (after 4x4 block averaging)\n", c4.relerr);
     std::printf("mean: test %.6g  reference %.6g\n", c.mean_test, c.mean_ref);
-    if (!sa.pixels.empty() || !sb.pixels.empty())
-        std::printf("z-score of the image mean = %.3f   pixels with |z| > 3: %.2f%%   relerr expected from noise: %.6f\n",
-                    c.mean_z, 100.0 * c.outlier_fraction, c.noise_relerr);
+    if (!sa.pixels.empty() || !sb.pixels.empty()) {
+        std::printf("z-score of the image mean = %.3f   pixels with |z| > 3: %.2f%%   relerr expected from noise: %.6f (relerr4: %.6f)\n",
+                    c.mean_z, 100.0 * c.outlier_fraction, c.noise_relerr, c4.noise_relerr);
+        for (const auto& [name, se] : {std::pair{"test", &sa}, std::pair{"reference", &sb}}) {
+            if (se->pixels.empty()) continue;
+            const Comparison alone = compare_images(b, b, *se, Image());
+            const Comparison alone4 = compare_images(block_average(b, 4), block_average(b, 4), block_average_stderr(*se, 4), Image());
+            std::printf("  noise of the %s alone: relerr %.6f, relerr4 %.6f\n", name, alone.noise_relerr, alone4.noise_relerr);
+        }
+    }
+    if (!z_map.empty()) {
+        if (sa.pixels.empty() && sb.pixels.empty()) throw Error("--z-map needs --stderr or --ref-stderr");
+        write_z_map(z_map, a, b, sa, sb);
+    }
 }
 
 } // namespace
@@ -326,13 +363,14 @@ void add_diff_commands(CLI::App& app) {
     add_method(g, *grad);
     g->callback([grad] { cmd_gradient(*grad); });
 
-    auto cmp = std::make_shared<std::array<std::string, 4>>();
+    auto cmp = std::make_shared<std::array<std::string, 5>>();
     auto* c = app.add_subcommand("compare", "relerr and z-scores of a derivative image against a reference");
     c->add_option("test", (*cmp)[0], "image to test (.exr)")->required();
     c->add_option("reference", (*cmp)[1], "reference image (.exr)")->required();
     c->add_option("--stderr", (*cmp)[2], "standard-error image of the test image");
     c->add_option("--ref-stderr", (*cmp)[3], "standard-error image of the reference");
-    c->callback([cmp] { cmd_compare((*cmp)[0], (*cmp)[1], (*cmp)[2], (*cmp)[3]); });
+    c->add_option("--z-map", (*cmp)[4], "write the per-pixel z-scores (D − R)/σ as a .png (blue < 0 < red, saturated at ±4) or .exr");
+    c->callback([cmp] { cmd_compare((*cmp)[0], (*cmp)[1], (*cmp)[2], (*cmp)[3], (*cmp)[4]); });
 }
 
 } // namespace penumbra::cli

@@ -1,9 +1,15 @@
 // Checks a derivative image against central finite differences (common random numbers), with tolerances
 // derived from standard errors estimated from 16 independent batches of each estimator:
 //  - unbiasedness: |z| of the image mean < 4 (t with 15 dof: P(|t| > 4) ~ 1e-3);
-//  - per pixel: fewer than 2% of pixel channels with |D − R| > 4σ (expected ~0.1% if unbiased);
+//  - per 2 × 2 block: fewer than 2% of the block channels that carry at least 1% of the largest reference
+//    block value beyond 4σ (expected ~0.1% if unbiased). Where only a few of the reference's samples switch
+//    sides of an edge (a wide filter's tails, a silhouette crossing a pixel's corner), its batch standard
+//    error underestimates its error, and a per-pixel count measures the reference's skew rather than the
+//    estimator: the mean of a block is closer to normal, the floor leaves out the far tails where the
+//    reference's weights are ~1e-3 of the peak, and a bias that matters still spans a block and shows;
 //  - relerr = Σ|D − R| / Σ|R| below 1.5 × its pure-noise expectation sqrt(2/π) Σσ / Σ|R| (+0.02 for the
-//    O(h²) truncation error of the central difference).
+//    O(h²) truncation error of the central difference), and the same after 4 × 4 block averaging (relerr4),
+//    where noise averages out and a bias does not.
 #pragma once
 #include "diff/finite_difference.h"
 #include "diff/interior.h"
@@ -20,25 +26,35 @@ namespace penumbra::test {
 
 struct DiffCheck {
     Comparison comparison;
+    Comparison comparison4;      // after 4 × 4 block averaging
     double noise_relerr = 0;     // expected relerr from noise alone
-    double outliers_4sigma = 0;  // fraction of pixel channels beyond 4σ
+    double outliers_4sigma = 0;  // fraction of the significant 2 × 2 block channels beyond 4σ
     bool passes() const {
         return std::abs(comparison.mean_z) < 4.0 && outliers_4sigma < 0.02 &&
-               comparison.relerr < 1.5 * noise_relerr + 0.02;
+               comparison.relerr < 1.5 * noise_relerr + 0.02 &&
+               comparison4.relerr < 1.5 * comparison4.noise_relerr + 0.02;
     }
 };
 
 inline DiffCheck check_against(const Image& d, const Image& d_se, const Image& fd, const Image& fd_se) {
     DiffCheck c;
     c.comparison = compare_images(d, fd, d_se, fd_se);
+    c.comparison4 = compare_images(block_average(d, 4), block_average(fd, 4), block_average_stderr(d_se, 4),
+                                   block_average_stderr(fd_se, 4));
     c.noise_relerr = c.comparison.noise_relerr;
+    const Image d2 = block_average(d, 2), fd2 = block_average(fd, 2);
+    const Image d2_se = block_average_stderr(d_se, 2), fd2_se = block_average_stderr(fd_se, 2);
+    double largest = 0;
+    for (const Color3f& r : fd2.pixels) largest = std::max(largest, double(max_component(abs(r))));
     int outliers = 0, n = 0;
-    for (size_t i = 0; i < fd.pixels.size(); ++i)
-        for (int k = 0; k < 3; ++k, ++n) {
-            const double s = std::hypot(double(d_se.pixels[i][k]), double(fd_se.pixels[i][k]));
-            if (std::abs(d.pixels[i][k] - fd.pixels[i][k]) > 4.0 * s) ++outliers;
+    for (size_t i = 0; i < fd2.pixels.size(); ++i)
+        for (int k = 0; k < 3; ++k) {
+            if (std::max(std::abs(d2.pixels[i][k]), std::abs(fd2.pixels[i][k])) < 0.01 * largest) continue;
+            ++n;
+            const double s = std::hypot(double(d2_se.pixels[i][k]), double(fd2_se.pixels[i][k]));
+            if (std::abs(d2.pixels[i][k] - fd2.pixels[i][k]) > 4.0 * s) ++outliers;
         }
-    c.outliers_4sigma = double(outliers) / n;
+    c.outliers_4sigma = n > 0 ? double(outliers) / n : 0.0;
     return c;
 }
 
@@ -84,6 +100,20 @@ inline Image with_detection_limit(const FiniteDifference& fd, const Image& prima
     return err;
 }
 
+// Where a visibility edge moves by a sizeable fraction of a pixel per step, the central difference has a
+// truncation error comparable to its noise: it is estimated per pixel by Richardson extrapolation from the
+// difference at twice the step, t = |D(2h) − D(h)| / 3 (the O(h²) error of D(h)), and added in quadrature to
+// the reference's standard error `error`.
+inline Image with_truncation_error(const Image& error, const FiniteDifference& fd_h, const FiniteDifference& fd_2h) {
+    Image out = error;
+    for (size_t i = 0; i < out.pixels.size(); ++i) {
+        const Color3f t = abs(fd_2h.derivative.pixels[i] - fd_h.derivative.pixels[i]) / 3.f;
+        const Color3f s = out.pixels[i];
+        out.pixels[i] = Color3f(std::hypot(s.x, t.x), std::hypot(s.y, t.y), std::hypot(s.z, t.z));
+    }
+    return out;
+}
+
 // The dot-product test of forward against reverse mode on the same samples: ⟨a, Jv⟩ (adjoint · derivative image)
 // and ⟨Jᵀa, v⟩ (gradient · direction), with Σ|a_k (Jv)_k| as the scale of their rounding differences.
 struct AdjointPair {
@@ -102,9 +132,10 @@ inline AdjointPair adjoint_pair(const Image& adjoint, const Image& derivative, c
 }
 
 inline std::string describe(const DiffCheck& c) {
-    return "relerr " + std::to_string(c.comparison.relerr) + " (noise " + std::to_string(c.noise_relerr) +
-           "), mean " + std::to_string(c.comparison.mean_test) + " vs fd " + std::to_string(c.comparison.mean_ref) +
-           ", z " + std::to_string(c.comparison.mean_z) + ", outliers(4σ) " + std::to_string(c.outliers_4sigma);
+    return "relerr " + std::to_string(c.comparison.relerr) + " (noise " + std::to_string(c.noise_relerr) + "), relerr4 " +
+           std::to_string(c.comparison4.relerr) + " (noise " + std::to_string(c.comparison4.noise_relerr) + "), mean " +
+           std::to_string(c.comparison.mean_test) + " vs fd " + std::to_string(c.comparison.mean_ref) + ", z " +
+           std::to_string(c.comparison.mean_z) + ", outliers(4σ, 2x2 blocks) " + std::to_string(c.outliers_4sigma);
 }
 
 } // namespace penumbra::test

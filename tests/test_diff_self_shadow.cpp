@@ -31,7 +31,7 @@ std::vector<float> deformation_field(const Parameter& positions) {
 struct SelfShadowRun {
     PsdrDerivative d;
     FiniteDifference fd;
-    Image fd_error; // the reference's per-pixel standard error, with its detection limit (see with_detection_limit in diff_check.h)
+    Image fd_error; // the reference's per-pixel standard error, with its detection limit and truncation error (diff_check.h)
 };
 
 SelfShadowRun run(const std::string& light, int interior_spp, int primary_spp, int direct_spp, int fd_spp, double h) {
@@ -54,7 +54,9 @@ SelfShadowRun run(const std::string& light, int interior_spp, int primary_spp, i
     ro.spp = fd_spp;
     ro.seed = 99 + 1000 * seed;
     r.fd = finite_difference(*scene, params, h, ro, 16);
-    r.fd_error = with_detection_limit(r.fd, r.d.interior.primal, h, fd_spp * 16, scene->sensor->film->rfilter->radius());
+    r.fd_error = with_truncation_error(
+        with_detection_limit(r.fd, r.d.interior.primal, h, fd_spp * 16, scene->sensor->film->rfilter->radius()), r.fd,
+        finite_difference(*scene, params, 2 * h, ro, 16));
     return r;
 }
 

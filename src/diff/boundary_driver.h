@@ -1,13 +1,17 @@
-// What the boundary estimators share: a boundary sample is one or more film positions s with detached weights
-// (the discontinuity's jump times the measure conversions, over the sampling density) and the normal velocity
-// of the discontinuity as a tape expression. The drivers run the samples in 16 fixed chunks (results do not
-// depend on the thread count), splat weight × dv/dθ through the pixel filter in forward mode, and propagate the
-// filter-weighted adjoint back to the parameters in reverse mode.
+// What the boundary estimators share: a boundary sample is one or more film positions s, each with a detached
+// weight (the discontinuity's jump times the measure conversions, over the sampling density) and the normal
+// velocity of the discontinuity as a tape expression (in the parameterization of the vertex the splat belongs
+// to: a receiver seen directly by an image-space camera moves differently from one in material form). The drivers
+// run the samples in 16 fixed chunks (results do not depend on the thread count), splat weight × dv/dθ through
+// the pixel filter in forward mode, and propagate the filter-weighted adjoint back to the parameters in reverse
+// mode.
 #pragma once
+#include "diff/first_vertex.h"
 #include "diff/parameters.h"
 #include "render/film_footprint.h"
 #include "render/path_tracer.h"
 
+#include <algorithm>
 #include <array>
 #include <utility>
 
@@ -22,24 +26,39 @@ struct BoundaryOptions {
     uint64_t seed = 0;
     int threads = 0;
     PathSettings path;
+    FirstVertex first_vertex = FirstVertex::Auto; // must match the interior term's (diff/first_vertex.h)
 };
 
 struct BoundarySample {
-    Var velocity; // value ~0; its derivative is the discontinuity's normal velocity
     // Where the discontinuity's contribution lands: film positions (pixels) with detached factors; several for a
     // detector subpath connected to the camera at several vertices, none for a failed sample.
+    struct Splat {
+        Vec2f s;
+        Color3f weight;
+        Var velocity; // value ~0; its derivative is the discontinuity's normal velocity
+    };
     static constexpr int MaxSplats = 8;
-    std::array<std::pair<Vec2f, Color3f>, MaxSplats> splats;
+    std::array<Splat, MaxSplats> splats;
     int n_splats = 0;
 
-    void add_splat(const Vec2f& s, const Color3f& weight) {
-        if (n_splats < MaxSplats) splats[n_splats++] = {s, weight};
+    void add_splat(const Vec2f& s, const Color3f& weight, const Var& velocity) {
+        if (n_splats < MaxSplats && velocity.id >= 0) splats[n_splats++] = {s, weight, velocity};
     }
     bool usable() const {
-        if (n_splats == 0 || velocity.id < 0) return false;
+        if (n_splats == 0) return false;
         for (int k = 0; k < n_splats; ++k)
-            if (!is_finite(splats[k].second)) return false;
+            if (!is_finite(splats[k].weight)) return false;
         return true;
+    }
+};
+
+// Sample i of the n samples of a boundary estimator. Its first random number is stratified over the n samples
+// (systematic sampling of the edges' total length, instead of independent positions): each edge, and each
+// pixel an edge crosses, gets a nearly deterministic share of the samples.
+struct BoundarySampleIndex {
+    uint64_t i, n;
+    float stratified(Sampler& sampler) const {
+        return std::min(float((double(i) + double(sampler.next_1d())) / double(n)), 0x1.fffffep-1f);
     }
 };
 
@@ -56,8 +75,7 @@ public:
 
 namespace detail {
 
-template <typename Body> void for_each_sample(const Film& film, const BoundaryOptions& options, uint64_t salt, const Body& body) {
-    const uint64_t n = uint64_t(film.width) * film.height * uint64_t(options.samples_per_pixel);
+template <typename Body> void for_each_sample(uint64_t n, const BoundaryOptions& options, uint64_t salt, const Body& body) {
     constexpr int chunks = 16;
     tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency());
     arena.execute([&] {
@@ -65,34 +83,41 @@ template <typename Body> void for_each_sample(const Film& film, const BoundaryOp
             Sampler sampler;
             for (uint64_t i = n * c / chunks; i < n * (c + 1) / chunks; ++i) {
                 sampler.start(options.seed ^ salt, i, 0);
-                body(c, sampler);
+                body(c, i, sampler);
             }
         });
     });
 }
 
+// The number of boundary samples: `count`, or the budget per pixel times the number of pixels.
+inline uint64_t sample_count(const Film& film, const BoundaryOptions& options, uint64_t count) {
+    return count > 0 ? count : uint64_t(film.width) * film.height * uint64_t(options.samples_per_pixel);
+}
+
 } // namespace detail
 
-// Forward mode: Σ_samples P_j(s) weight dv/dθ / N for every pixel j. `sample(Sampler&, RayCounter&)` draws
-// one BoundarySample (recording its velocity on the thread's tape).
+// Forward mode: Σ_samples P_j(s) weight dv/dθ / N for every pixel j. `sample(BoundarySampleIndex, Sampler&,
+// RayCounter&)` draws the i-th of the N BoundarySamples (recording its velocities on the thread's tape) from a
+// sampler started for it; N is `count`, or samples_per_pixel × the number of pixels.
 template <typename SampleFn>
 Image boundary_derivative(const Scene& scene, const Parameters& params, const BoundaryOptions& options, uint64_t salt,
-                          const SampleFn& sample) {
+                          const SampleFn& sample, uint64_t count = 0) {
     const Film& film = *scene.sensor->film;
-    const double n = double(film.width) * film.height * options.samples_per_pixel;
+    const uint64_t n_samples = detail::sample_count(film, options, count);
+    const double n = double(n_samples);
     std::vector<Image> chunks(16, Image(film.width, film.height));
-    detail::for_each_sample(film, options, salt, [&](int c, Sampler& sampler) {
+    detail::for_each_sample(n_samples, options, salt, [&](int c, uint64_t i, Sampler& sampler) {
         thread_local std::vector<float> tangent;
         Tape& tape = Tape::current();
         tape.clear();
         RayCounter rays;
-        const BoundarySample b = sample(sampler, rays);
+        const BoundarySample b = sample(BoundarySampleIndex{i, n_samples}, sampler, rays);
         if (b.usable()) {
             tape.forward(params.direction().data(), tangent);
-            const float dv = float(double(tangent[b.velocity.id]) / n);
             for (int k = 0; k < b.n_splats; ++k) {
-                const Color3f value = b.splats[k].second * dv;
-                for_each_pixel_in_footprint(film, b.splats[k].first, [&](int x, int y, float w) { chunks[c].at(x, y) += value * w; });
+                const BoundarySample::Splat& splat = b.splats[k];
+                const Color3f value = splat.weight * float(double(tangent[splat.velocity.id]) / n);
+                for_each_pixel_in_footprint(film, splat.s, [&](int x, int y, float w) { chunks[c].at(x, y) += value * w; });
             }
         }
         tape.clear();
@@ -106,23 +131,28 @@ Image boundary_derivative(const Scene& scene, const Parameters& params, const Bo
 // Reverse mode: adds Σ_samples (Σ_j adjoint_j P_j(s)) · weight · dv/dθ / N to `gradient`.
 template <typename SampleFn>
 void boundary_gradient(const Scene& scene, const Image& adjoint, const BoundaryOptions& options, uint64_t salt,
-                       const SampleFn& sample, std::vector<double>& gradient) {
+                       const SampleFn& sample, std::vector<double>& gradient, uint64_t count = 0) {
     const Film& film = *scene.sensor->film;
-    const double n = double(film.width) * film.height * options.samples_per_pixel;
+    const uint64_t n_samples = detail::sample_count(film, options, count);
+    const double n = double(n_samples);
     const size_t dim = gradient.size();
     tbb::enumerable_thread_specific<std::vector<double>> local([dim] { return std::vector<double>(dim, 0.0); });
-    detail::for_each_sample(film, options, salt, [&](int, Sampler& sampler) {
+    detail::for_each_sample(n_samples, options, salt, [&](int, uint64_t i, Sampler& sampler) {
         thread_local std::vector<float> scratch;
+        thread_local std::vector<std::pair<int32_t, float>> seeds;
         Tape& tape = Tape::current();
         tape.clear();
         RayCounter rays;
-        const BoundarySample b = sample(sampler, rays);
+        const BoundarySample b = sample(BoundarySampleIndex{i, n_samples}, sampler, rays);
         if (b.usable()) {
-            double seed = 0;
-            for (int k = 0; k < b.n_splats; ++k)
-                for_each_pixel_in_footprint(film, b.splats[k].first,
-                                            [&](int x, int y, float w) { seed += w * dot(adjoint.at(x, y), b.splats[k].second); });
-            tape.backward({{b.velocity.id, float(seed / n)}}, local.local().data(), scratch);
+            seeds.clear();
+            for (int k = 0; k < b.n_splats; ++k) {
+                const BoundarySample::Splat& splat = b.splats[k];
+                double seed = 0;
+                for_each_pixel_in_footprint(film, splat.s, [&](int x, int y, float w) { seed += w * dot(adjoint.at(x, y), splat.weight); });
+                seeds.emplace_back(splat.velocity.id, float(seed / n));
+            }
+            tape.backward(seeds, local.local().data(), scratch);
         }
         tape.clear();
     });

@@ -4,35 +4,9 @@
 #include "scene/shape_interaction.h"
 
 #include <algorithm>
+#include <map>
 
 namespace penumbra {
-
-SceneEdges::SceneEdges(const Scene& scene) {
-    std::vector<float> lengths;
-    for (const auto& shape : scene.shapes) {
-        const std::vector<Edge> mesh_edges = discontinuity_edges(shape->mesh);
-        const bool closed = std::none_of(mesh_edges.begin(), mesh_edges.end(), [](const Edge& e) { return e.f1 < 0; });
-        for (const Edge& e : mesh_edges) {
-            const float l = norm(shape->mesh.positions[e.v1] - shape->mesh.positions[e.v0]);
-            if (!(l > 0.f)) continue;
-            edges.push_back({shape.get(), e, closed});
-            lengths.push_back(l);
-            total_length += l;
-        }
-    }
-    if (!lengths.empty()) by_length = DiscreteDistribution(lengths);
-}
-
-EdgePoint sample_edge_point(const SceneEdges& edges, float u) {
-    EdgePoint out;
-    out.edge = &edges.edges[edges.by_length.sample(u)];
-    out.tau = u;
-    const TriangleMesh& m = out.edge->shape->mesh;
-    out.a = m.positions[out.edge->edge.v0];
-    out.b = m.positions[out.edge->edge.v1];
-    out.p = out.a + (out.b - out.a) * u;
-    return out;
-}
 
 namespace {
 
@@ -48,6 +22,13 @@ Vec3f opposite_vertex(const TriangleMesh& m, int32_t f, const Vec3f& a, const Ve
         if (d > best_d) best_d = d, best = m.positions[i[k]];
     }
     return best;
+}
+
+// Whether face f1 lies behind face f0's plane: a convex edge (of a solid, with outward normals).
+bool convex_edge(const SceneEdges::SceneEdge& se) {
+    const TriangleMesh& m = se.shape->mesh;
+    const Vec3f a = m.positions[se.edge.v0], b = m.positions[se.edge.v1];
+    return dot(face_normal(m, se.edge.f0), opposite_vertex(m, se.edge.f1, a, b) - a) < 0.f;
 }
 
 // Intersection of the line from `from` through `through` with the plane (p0, n).
@@ -69,7 +50,7 @@ bool grazes(const SceneEdges::SceneEdge& se, const Vec3f& d) {
     const Vec3f u0 = opposite_vertex(m, e.f0, a, b) - a, u1 = opposite_vertex(m, e.f1, a, b) - a;
     if (!(dot(u0, side) * dot(u1, side) > 0.f)) return false;
     // ... and for a solid, that wedge must be the solid's (a convex edge: face 1 lies behind face 0).
-    return !se.closed || dot(face_normal(m, e.f0), u1) < 0.f;
+    return !se.closed || convex_edge(se);
 }
 
 bool sample_grazing_direction(const SceneEdges::SceneEdge& se, const Vec2f& u, Vec3f& d, float& pdf) {
@@ -89,7 +70,7 @@ bool sample_grazing_direction(const SceneEdges::SceneEdge& se, const Vec2f& u, V
     // Azimuths about the edge: face 0 at 0, face 1 at φ1 ∈ (−π, π); the wedge between them spans |φ1|.
     const Vec3f u0 = across(e.f0), w = cross(axis, u0), u1 = across(e.f1);
     const float phi1 = std::atan2(dot(u1, w), dot(u1, u0)), wedge = std::abs(phi1);
-    if (se.closed && !(dot(face_normal(m, e.f0), u1) < 0.f)) return false; // a concave edge of a solid
+    if (se.closed && !convex_edge(se)) return false; // a concave edge of a solid
     const float arc = Pi - wedge;
     if (!(arc > 0.f)) return false;
     // Azimuth uniform on the two arcs (wedge, π) and (wedge + π, 2π) (mirrored for φ1 < 0), height uniform.
@@ -100,6 +81,112 @@ bool sample_grazing_direction(const SceneEdges::SceneEdge& se, const Vec2f& u, V
     d = axis * z + (u0 * std::cos(psi) + w * std::sin(psi)) * r;
     pdf = 1.f / (4.f * arc);
     return true;
+}
+
+namespace {
+
+EdgeSet make_edge_set(const SceneEdges& edges, std::vector<uint32_t> indices) {
+    EdgeSet set;
+    set.indices = std::move(indices);
+    std::vector<float> lengths;
+    lengths.reserve(set.indices.size());
+    for (const uint32_t i : set.indices) {
+        const SceneEdges::SceneEdge& se = edges.edges[i];
+        lengths.push_back(norm(se.shape->mesh.positions[se.edge.v1] - se.shape->mesh.positions[se.edge.v0]));
+        set.total_length += lengths.back();
+    }
+    if (!lengths.empty()) set.by_length = DiscreteDistribution(lengths);
+    return set;
+}
+
+// Whether a shape's surface can hide part of itself from a light on or inside it: not when it is flat (only
+// boundary edges) or a convex solid (closed, every edge convex).
+bool can_shadow_itself(const std::vector<SceneEdges::SceneEdge>& edges, size_t first, size_t last) {
+    bool flat = true, convex = true;
+    for (size_t i = first; i < last; ++i) {
+        const SceneEdges::SceneEdge& se = edges[i];
+        if (se.edge.f1 < 0) {
+            convex = false;
+            continue;
+        }
+        flat = false;
+        if (!convex_edge(se)) convex = false;
+    }
+    return !(flat || convex);
+}
+
+// The edges of `edges` that can cast the shadows of `emitter` (see SceneEdges::lit).
+std::vector<uint32_t> shadow_edges(const SceneEdges& edges, const Emitter& emitter, const BoundingSphere& scene_bounds,
+                                   const std::map<const Shape*, bool>& self_shadowing) {
+    BoundingSphere light{Vec3f(0.f), 0.f};
+    Vec3f travel(0.f); // directional lights: the direction of the light's rays
+    const bool environment = emitter.is_infinite() && !emitter.is_delta();
+    if (const Shape* shape = emitter.shape()) {
+        Vec3f lo(Infinity), hi(-Infinity);
+        for (const Vec3f& p : shape->mesh.positions) lo = min(lo, p), hi = max(hi, p);
+        light = {(lo + hi) * 0.5f, norm(hi - lo) * 0.5f};
+    } else if (!environment) {
+        Interaction3f ref;
+        ref.p = scene_bounds.center;
+        const DirectionSample3f ds = emitter.sample_direction(ref, Vec2f(0.5f)).first;
+        if (emitter.is_infinite()) travel = ds.d * -1.f;
+        else light.center = ds.p;
+    }
+    std::vector<uint32_t> out;
+    for (uint32_t i = 0; i < edges.edges.size(); ++i) {
+        const SceneEdges::SceneEdge& se = edges.edges[i];
+        if (se.shape == emitter.shape() && !self_shadowing.at(se.shape)) continue;
+        const TriangleMesh& m = se.shape->mesh;
+        const Vec3f a = m.positions[se.edge.v0];
+        bool candidate;
+        if (environment) {
+            candidate = !se.closed || convex_edge(se); // some direction grazes it
+        } else if (emitter.is_infinite()) {
+            candidate = grazes(se, travel);
+        } else {
+            const auto plane_meets = [&](int32_t f) {
+                const Vec3f n = face_normal(m, f);
+                return std::abs(dot(n, light.center - a)) <= light.radius * norm(n);
+            };
+            const Vec3f from_center = a - light.center;
+            candidate = plane_meets(se.edge.f0) || (se.edge.f1 >= 0 && plane_meets(se.edge.f1)) ||
+                        (squared_norm(from_center) > 0.f && grazes(se, normalize(from_center)));
+        }
+        if (candidate) out.push_back(i);
+    }
+    return out;
+}
+
+} // namespace
+
+SceneEdges::SceneEdges(const Scene& scene) {
+    std::map<const Shape*, bool> self_shadowing;
+    std::vector<uint32_t> indices;
+    for (const auto& shape : scene.shapes) {
+        const std::vector<Edge> mesh_edges = discontinuity_edges(shape->mesh);
+        const bool closed = std::none_of(mesh_edges.begin(), mesh_edges.end(), [](const Edge& e) { return e.f1 < 0; });
+        const size_t first = edges.size();
+        for (const Edge& e : mesh_edges) {
+            if (!(norm(shape->mesh.positions[e.v1] - shape->mesh.positions[e.v0]) > 0.f)) continue;
+            indices.push_back(uint32_t(edges.size()));
+            edges.push_back({shape.get(), e, closed});
+        }
+        self_shadowing[shape.get()] = can_shadow_itself(edges, first, edges.size());
+    }
+    all = make_edge_set(*this, std::move(indices));
+    for (const auto& emitter : scene.emitters)
+        lit.push_back(make_edge_set(*this, shadow_edges(*this, *emitter, scene.bounding_sphere(), self_shadowing)));
+}
+
+EdgePoint sample_edge_point(const SceneEdges& edges, const EdgeSet& set, float u) {
+    EdgePoint out;
+    out.edge = &edges.edges[set.indices[set.by_length.sample(u)]];
+    out.tau = u;
+    const TriangleMesh& m = out.edge->shape->mesh;
+    out.a = m.positions[out.edge->edge.v0];
+    out.b = m.positions[out.edge->edge.v1];
+    out.p = out.a + (out.b - out.a) * u;
+    return out;
 }
 
 BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& form, const SegmentSource& source,
@@ -131,7 +218,7 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& f
     const Vec3f x_d = recv.p;
 
     // The curve on the receiver's plane: its tangent from nearby edge points, the stretch dℓ(x_D0)/dℓ(x_B),
-    // and its normal turned toward the occluded side (found by two probe rays from the source).
+    // and its normal turned toward the occluded side.
     const uint32_t* tri = &recv.shape->mesh.indices[3 * size_t(recv.prim_index)];
     const Vec3f p0 = recv.shape->mesh.positions[tri[0]];
     const float delta = 1e-3f;
@@ -141,20 +228,18 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& f
     out.stretch = norm(x_d2 - x_d1) / norm(x_b2 - x_b1);
     if (!std::isfinite(out.stretch) || !(out.stretch > 0.f)) return out;
     Vec3f n = normalize(cross(recv.n, x_d2 - x_d1));
-    const float eps = 1e-3f * norm(x_d2 - x_d1) / (2.f * delta) + 1e-5f;
-    // From infinity the probes start on the receiver (offset along its normal) and look back along −d.
-    auto probe_dark = [&](const Vec3f& target) {
-        if (!source.infinite) return blocked(target);
-        Interaction3f at;
-        at.p = target;
-        at.n = recv.n;
-        ++rays.rays;
-        return scene.occluded(at.spawn_ray(dir * -1.f));
-    };
-    const bool plus_dark = probe_dark(x_d + n * eps), minus_dark = probe_dark(x_d - n * eps);
-    if (plus_dark == minus_dark) return out;
-    if (!plus_dark) n = n * -1.f;
-    out.dark_point = x_d + n * eps;
+    // The occluded side, from the geometry rather than from probe rays (which, a hair's breadth from a finely
+    // tessellated silhouette and offset off the source's surface, can pass on the wrong side of the edge): the
+    // line source → x grazes the edge for x on the plane Π through the edge and the source; the edge's faces
+    // lie on one side of Π (the line grazes), and points of the receiver whose lines pass on that side are
+    // behind them. The lit side is lit: source → x_B → x_D0 is clear.
+    const TriangleMesh& edge_mesh = x_b.edge->shape->mesh;
+    const Vec3f plane_normal = cross(x_b.b - x_b.a, dir);
+    const float faces_side = dot(opposite_vertex(edge_mesh, x_b.edge->edge.f0, x_b.a, x_b.b) - x_b.a, plane_normal);
+    const float n_side = dot(n, plane_normal);
+    if (!(std::abs(n_side) > 1e-6f * norm(plane_normal)) || faces_side == 0.f) return out;
+    if ((n_side > 0.f) != (faces_side > 0.f)) n = n * -1.f;
+    out.dark_point = x_d + n * (1e-3f * norm(x_d2 - x_d1) / (2.f * delta) + 1e-5f);
 
     recv.wi = recv.to_local(dir * -1.f);
     out.receiver = recv;
@@ -172,8 +257,16 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& f
                         : Vec3<Var>(source.p);
     const Vec3<Var> q0 = form.position(*recv.shape, tri[0]), q1 = form.position(*recv.shape, tri[1]),
                     q2 = form.position(*recv.shape, tri[2]);
-    const Vec3<Var> xd_t = line_plane(src_t, xb_t, q0, cross(q1 - q0, q2 - q0));
+    const Vec3<Var> n_t = cross(q1 - q0, q2 - q0);
+    const Vec3<Var> xd_t = line_plane(src_t, xb_t, q0, n_t);
     out.velocity = dot(xd_t - form.vertex(recv).p, Vec3<Var>(n));
+    if (form.image_space_first_vertex()) {
+        // The camera ray through x_D0 (fixed) meets the moving receiver plane at the image-space vertex.
+        const Vec3f to_camera = scene.sensor->to_sensor(x_d);
+        out.velocity_seen = dot(xd_t - line_plane(Vec3<Var>(x_d), Vec3<Var>(x_d + to_camera), q0, n_t), Vec3<Var>(n));
+    } else {
+        out.velocity_seen = out.velocity;
+    }
     out.valid = true;
     return out;
 }

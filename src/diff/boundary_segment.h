@@ -15,7 +15,16 @@
 
 namespace penumbra {
 
-// Every discontinuity edge of the scene, sampled by length.
+// A set of edges sampled by length.
+struct EdgeSet {
+    std::vector<uint32_t> indices; // into SceneEdges::edges
+    DiscreteDistribution by_length;
+    float total_length = 0.f;
+    bool empty() const { return indices.empty(); }
+};
+
+// Every discontinuity edge of the scene, sampled by length, and for each emitter the edges that can cast its
+// shadows.
 struct SceneEdges {
     struct SceneEdge {
         const Shape* shape;
@@ -23,20 +32,26 @@ struct SceneEdges {
         bool closed; // the edge's mesh has no boundary edges (a solid: concave edges never graze a line)
     };
     std::vector<SceneEdge> edges;
-    DiscreteDistribution by_length;
-    float total_length = 0.f;
+    EdgeSet all;
+    // Per emitter (in the order of Scene::emitters), the edges that can graze a segment leaving it: for a light
+    // within a bounding sphere, an edge qualifies if one of its face planes meets the sphere, or else if it
+    // grazes the line from the center (the faces' orientations are then the same from every point of the
+    // sphere); for a directional light the exact test along its direction; for environments every edge that
+    // can graze at all. A convex or flat emitter's own edges cannot shadow it and are left out. On a finely
+    // tessellated occluder only a band of edges around the silhouette remains, instead of all of them.
+    std::vector<EdgeSet> lit;
 
     explicit SceneEdges(const Scene& scene);
     bool empty() const { return edges.empty(); }
 };
 
-// A point on an edge, drawn with density 1 / total_length (per unit length).
+// A point on an edge of `set`, drawn with density 1 / set.total_length (per unit length).
 struct EdgePoint {
     const SceneEdges::SceneEdge* edge;
     float tau;      // position along the edge, in [0, 1]
     Vec3f a, b, p;  // the edge's endpoints and the point
 };
-EdgePoint sample_edge_point(const SceneEdges& edges, float u);
+EdgePoint sample_edge_point(const SceneEdges& edges, const EdgeSet& set, float u);
 
 // Whether the line through the edge with direction d grazes the mesh there (it is a discontinuity of the
 // visibility of that line): a boundary edge, or a convex edge with one face turned toward d and one away;
@@ -70,6 +85,12 @@ struct BoundarySegment {
     Vec3f dark_point;              // a point of the receiver just across the curve, on the occluded side
     Var velocity;                  // (x_D0(θ) − receiver material point(θ)) · n_dark: its derivative is the
                                    // curve's normal velocity, n_dark pointing into the occluded side
+    Var velocity_seen;             // the same relative to the point the fixed camera ray through x_D0 meets on
+                                   // the moving receiver: the receiver as an image-space first vertex
+
+    // The velocity in the parameterization of the detector vertex at depth t (t = 0: x_D0 itself, connected to
+    // the camera; it is the first path vertex).
+    const Var& velocity_at_depth(int t) const { return t == 0 ? velocity_seen : velocity; }
 };
 
 // Extends source → x_B beyond the edge to the receiver x_D0. Invalid when the edge does not graze the line,

@@ -3,6 +3,8 @@
 #include "diff/detector_subpath.h"
 #include "scene/shape_interaction.h"
 
+#include <algorithm>
+
 namespace penumbra {
 
 namespace {
@@ -22,16 +24,22 @@ Color3f incident(const Emitter& emitter, const SegmentSource& light, const Vec3f
 } // namespace
 
 BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edges, const MaterialForm& form, int t_min,
-                                       int t_max, const PathSettings& settings, Sampler& sampler, RayCounter& rays) {
+                                       int t_max, const PathSettings& settings, const BoundarySampleIndex& index,
+                                       Sampler& sampler, RayCounter& rays) {
     BoundarySample out;
-    const EdgePoint x_b = sample_edge_point(edges, sampler.next_1d());
-
-    // A light point: point lights at their position, area lights by area; directional and environment emitters
-    // give a direction (from infinity), the latter by their solid-angle density.
-    float u_light = sampler.next_1d(), select_pdf = 0.f;
-    const Emitter* emitter = scene.sample_emitter(u_light, select_pdf);
+    // An emitter, a point on one of the edges that can cast its shadows (the stratified number, rescaled by the
+    // emitter selection, stratifies the edge points), and a light point: point lights at their position, area
+    // lights by area; directional and environment emitters give a direction (from infinity), the latter by
+    // their solid-angle density.
+    float u_edge = index.stratified(sampler), select_pdf = 0.f;
+    const Emitter* emitter = scene.sample_emitter(u_edge, select_pdf);
     const Vec2f u2 = sampler.next_2d();
     if (!emitter) return out;
+    const EdgeSet& shadow_edges = edges.lit[size_t(std::find_if(scene.emitters.begin(), scene.emitters.end(), [&](const auto& e) {
+                                                       return e.get() == emitter;
+                                                   }) - scene.emitters.begin())];
+    if (shadow_edges.empty()) return out;
+    const EdgePoint x_b = sample_edge_point(edges, shadow_edges, u_edge);
     SegmentSource light;
     float light_pdf = select_pdf; // area or solid-angle density (1 for delta lights) times the selection probability
     if (const Shape* shape = emitter->shape()) {
@@ -58,9 +66,11 @@ BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edg
     detector_connections(scene, seg.receiver, seg.dark_point, t_min, t_max, settings, sampler, rays, connections);
     // The segment's factor: incident term × |cos| at x_D0 × dℓ(x_D0)/dℓ(x_B), over the edge and light densities.
     const Color3f factor =
-        incident(*emitter, light, seg.receiver.p) * (seg.cos_receiver * seg.stretch * edges.total_length / light_pdf);
-    for (int k = 0; k < connections.count; ++k) out.add_splat(connections.items[k].s, factor * connections.items[k].weight);
-    out.velocity = seg.velocity;
+        incident(*emitter, light, seg.receiver.p) * (seg.cos_receiver * seg.stretch * shadow_edges.total_length / light_pdf);
+    for (int k = 0; k < connections.count; ++k) {
+        const CameraConnection& c = connections.items[k];
+        out.add_splat(c.s, factor * c.weight, seg.velocity_at_depth(c.t));
+    }
     return out;
 }
 
@@ -73,18 +83,18 @@ constexpr uint64_t Salt = 0x94D049BB133111EBULL;
 Image DirectBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
     if (edges_.empty() || scene_.emitters.empty())
         return Image(scene_.sensor->film->width, scene_.sensor->film->height);
-    const MaterialForm form(params);
-    return boundary_derivative(scene_, params, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
-        return sample_emitter_boundary(scene_, edges_, form, 0, 0, options.path, sampler, rays);
+    const MaterialForm form(scene_, params, options.first_vertex);
+    return boundary_derivative(scene_, params, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+        return sample_emitter_boundary(scene_, edges_, form, 0, 0, options.path, index, sampler, rays);
     });
 }
 
 void DirectBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
                               std::vector<double>& gradient) const {
     if (edges_.empty() || scene_.emitters.empty()) return;
-    const MaterialForm form(params);
-    boundary_gradient(scene_, adjoint, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
-        return sample_emitter_boundary(scene_, edges_, form, 0, 0, options.path, sampler, rays);
+    const MaterialForm form(scene_, params, options.first_vertex);
+    boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+        return sample_emitter_boundary(scene_, edges_, form, 0, 0, options.path, index, sampler, rays);
     }, gradient);
 }
 

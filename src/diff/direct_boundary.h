@@ -17,7 +17,8 @@ namespace penumbra {
 // connections at depths t_min..t_max (diff/detector_subpath.h): the direct term uses t = 0 only, the
 // indirect term t ≥ 1.
 BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edges, const MaterialForm& form, int t_min,
-                                       int t_max, const PathSettings& settings, Sampler& sampler, RayCounter& rays);
+                                       int t_max, const PathSettings& settings, const BoundarySampleIndex& index,
+                                       Sampler& sampler, RayCounter& rays);
 
 class DirectBoundary final : public BoundaryTerm {
 public:

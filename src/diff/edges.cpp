@@ -52,9 +52,19 @@ std::vector<Edge> discontinuity_edges(const TriangleMesh& mesh) {
         if (j - i == 1) {
             edges.push_back({h.v0, h.v1, h.face, -1});
         } else if (j - i == 2) {
-            const Vec3f n0 = face_normal(mesh, h.face), n1 = face_normal(mesh, halves[i + 1].face);
-            const float c = dot(n0, n1) / std::sqrt(squared_norm(n0) * squared_norm(n1));
-            if (!(c > 1.f - 1e-6f)) edges.push_back({h.v0, h.v1, h.face, halves[i + 1].face});
+            // Coplanar faces (to float precision: the apex of one lies in the other's plane within 1e-6 of its
+            // distance) make a flat edge. Fine tessellations have dihedral angles far below what a test on the
+            // normals' cosine resolves (near the poles of a uv sphere, a few hundredths of a degree).
+            const int32_t f1 = halves[i + 1].face;
+            const uint32_t* t1 = &mesh.indices[3 * size_t(f1)];
+            const Vec3f a = mesh.positions[h.v0], n0 = face_normal(mesh, h.face);
+            float distance = 0.f, extent = 0.f;
+            for (int k = 0; k < 3; ++k) {
+                const Vec3f q = mesh.positions[t1[k]] - a;
+                distance = std::max(distance, std::abs(dot(n0, q)));
+                extent = std::max(extent, norm(q));
+            }
+            if (distance > 1e-6f * extent * norm(n0)) edges.push_back({h.v0, h.v1, h.face, f1});
         } else {
             // Non-manifold: every face pair may be a discontinuity; keep each face as a boundary.
             for (size_t k = i; k < j; ++k) edges.push_back({halves[k].v0, halves[k].v1, halves[k].face, -1});

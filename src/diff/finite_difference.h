@@ -13,8 +13,8 @@ struct FiniteDifference {
     double seconds = 0;
 };
 
-// Renders with the scene's integrator at θ0 ± h·direction (same seeds on both sides) in `batches` independent
-// batches, and restores θ0 afterwards.
+// Renders with the scene's integrator at θ0 ± h·direction (same seeds on both sides, film positions stratified
+// within each pixel) in `batches` independent batches, and restores θ0 afterwards.
 FiniteDifference finite_difference(Scene& scene, Parameters& params, double h, const RenderOptions& options,
                                    int batches = 1);
 
@@ -30,5 +30,12 @@ struct Comparison {
 // standard error of an image mean is estimated as sqrt(Σσ²)/N (pixels independent).
 Comparison compare_images(const Image& test, const Image& ref, const Image& test_stderr = Image(),
                           const Image& ref_stderr = Image());
+
+// The image averaged over k × k blocks (partial blocks at the right and bottom edges averaged over what they
+// hold), and its standard error from per-pixel standard errors (pixels independent). Noise averages out over a
+// block while a bias does not: relerr after 4 × 4 block averaging ("relerr4") is the accuracy measure of the
+// estimator suite.
+Image block_average(const Image& image, int k);
+Image block_average_stderr(const Image& stderr_img, int k);
 
 } // namespace penumbra

@@ -28,11 +28,12 @@ Color3f reflected_radiance(const Scene& scene, const SurfaceInteraction3f& x_s0,
 
 // Algorithm 1 of paper 001 for surfaces: one multi-directional boundary sample.
 BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, const MaterialForm& form,
-                                  const PathSettings& settings, Sampler& sampler, RayCounter& rays) {
+                                  const PathSettings& settings, const BoundarySampleIndex& index, Sampler& sampler,
+                                  RayCounter& rays) {
     BoundarySample out;
     const int t_max = max_detector_depth(settings, 2);
     if (settings.max_depth >= 0 && t_max < 0) return out;
-    const EdgePoint x_b = sample_edge_point(edges, sampler.next_1d());
+    const EdgePoint x_b = sample_edge_point(edges, edges.all, index.stratified(sampler));
     Vec3f w_b;
     float pdf_w;
     if (!sample_grazing_direction(*x_b.edge, sampler.next_2d(), w_b, pdf_w)) return out;
@@ -52,7 +53,7 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
     // G(x_S0, x_D0) times the Jacobian of Eq. 40 over the density of (x_B, ω_B):
     //   |cos φ_S| |cos φ_D| / r² · r_S² / |cos φ_S| · stretch = |cos φ_D| r_S² stretch / r².
     const float r_s2 = squared_norm(x_b.p - x_s0.p), r2 = squared_norm(seg.receiver.p - x_s0.p);
-    const float factor = seg.cos_receiver * r_s2 * seg.stretch / r2 * edges.total_length / pdf_w;
+    const float factor = seg.cos_receiver * r_s2 * seg.stretch / r2 * edges.all.total_length / pdf_w;
 
     // The source subpath: one estimate per path-length budget the connections need (all from the same
     // random numbers; each is unbiased for its budget).
@@ -67,9 +68,8 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
             radiance = reflected_radiance(scene, x_s0, seg.receiver.p, budget, settings, sampler, rays);
             budget_of_radiance = budget;
         }
-        if (!is_black(radiance)) out.add_splat(c.s, radiance * c.weight * factor);
+        if (!is_black(radiance)) out.add_splat(c.s, radiance * c.weight * factor, seg.velocity_at_depth(c.t));
     }
-    out.velocity = seg.velocity;
     return out;
 }
 
@@ -79,16 +79,16 @@ Image IndirectBoundary::derivative(const Parameters& params, const BoundaryOptio
     const Film& film = *scene_.sensor->film;
     Image result(film.width, film.height);
     if (edges_.empty()) return result;
-    const MaterialForm form(params);
+    const MaterialForm form(scene_, params, options.first_vertex);
     const int t_max = max_detector_depth(options.path, 1);
     if (!scene_.emitters.empty() && (t_max < 0 || t_max >= 1)) {
-        result = boundary_derivative(scene_, params, options, EmitterSalt, [&](Sampler& sampler, RayCounter& rays) {
-            return sample_emitter_boundary(scene_, edges_, form, 1, t_max, options.path, sampler, rays);
+        result = boundary_derivative(scene_, params, options, EmitterSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+            return sample_emitter_boundary(scene_, edges_, form, 1, t_max, options.path, index, sampler, rays);
         });
     }
     const Image directional =
-        boundary_derivative(scene_, params, options, DirectionalSalt, [&](Sampler& sampler, RayCounter& rays) {
-            return sample_directional(scene_, edges_, form, options.path, sampler, rays);
+        boundary_derivative(scene_, params, options, DirectionalSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+            return sample_directional(scene_, edges_, form, options.path, index, sampler, rays);
         });
     for (size_t i = 0; i < result.pixels.size(); ++i) result.pixels[i] += directional.pixels[i];
     return result;
@@ -97,15 +97,15 @@ Image IndirectBoundary::derivative(const Parameters& params, const BoundaryOptio
 void IndirectBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
                                 std::vector<double>& gradient) const {
     if (edges_.empty()) return;
-    const MaterialForm form(params);
+    const MaterialForm form(scene_, params, options.first_vertex);
     const int t_max = max_detector_depth(options.path, 1);
     if (!scene_.emitters.empty() && (t_max < 0 || t_max >= 1)) {
-        boundary_gradient(scene_, adjoint, options, EmitterSalt, [&](Sampler& sampler, RayCounter& rays) {
-            return sample_emitter_boundary(scene_, edges_, form, 1, t_max, options.path, sampler, rays);
+        boundary_gradient(scene_, adjoint, options, EmitterSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+            return sample_emitter_boundary(scene_, edges_, form, 1, t_max, options.path, index, sampler, rays);
         }, gradient);
     }
-    boundary_gradient(scene_, adjoint, options, DirectionalSalt, [&](Sampler& sampler, RayCounter& rays) {
-        return sample_directional(scene_, edges_, form, options.path, sampler, rays);
+    boundary_gradient(scene_, adjoint, options, DirectionalSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+        return sample_directional(scene_, edges_, form, options.path, index, sampler, rays);
     }, gradient);
 }
 

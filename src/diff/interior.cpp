@@ -1,6 +1,7 @@
 #include "diff/interior.h"
 
 #include "core/batch_stats.h"
+#include "core/stratified.h"
 #include "diff/material_form.h"
 #include "render/path.h"
 #include "render/tiles.h"
@@ -37,11 +38,35 @@ FilmSample sample_film(const ReconstructionFilter& filter, Sampler& sampler, boo
     return {offset, pdf};
 }
 
+// Sample `index` of the `count` samples a pixel gets, and the seed of its strata's permutation.
+struct FilmStratum {
+    uint32_t index, count, seed;
+};
+
+// One camera path of pixel (x, y) with the image-space first vertex: the film position is drawn by filter
+// importance sampling, as the renderer does (stratified over the pixel's samples), and its ray stays fixed; x1(θ) slides along it with the surface
+// (MaterialForm::ray_vertex). The camera factor W_j / p is the renderer's sample weight, independent of θ.
+Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sampler& sampler, int x, int y,
+                               const FilmStratum& stratum, const PathSettings& settings, RayCounter& rays) {
+    const Sensor& sensor = *scene.sensor;
+    const Vec2f offset =
+        sensor.film->rfilter->sample(stratified_2d(stratum.index, stratum.count, stratum.seed, sampler.next_2d()));
+    const auto [ray, ray_weight] = sensor.sample_ray(Vec2f(x + 0.5f + offset.x, y + 0.5f + offset.y), sampler.next_2d());
+    ++rays.rays;
+    const SurfaceInteraction3f first = scene.intersect(ray);
+    if (!first.is_valid())
+        return Color3<Var>(settings.hide_emitters ? Color3f(0.f) : scene.eval_environment(ray.d) * ray_weight);
+    SurfaceInteraction<Var> x1 = form.ray_vertex(first, ray);
+    x1.wi = x1.to_local(Vec3<Var>(ray.d * -1.f));
+    return trace_path<Var>(scene, sampler, ray, first, x1, form, settings, rays) * Color3<Var>(ray_weight);
+}
+
 // One camera path of pixel (x, y) as a function of θ: W_j(x1(θ)) L(x1 → camera) / p, with the camera factor
 // W_j / p = P_j(s(θ)) |ds/dA|(θ) J(p1) / (p_s |ds/dA|(θ0)) (the pinhole importance of Eqs. 22-23 written on the
 // film, P_j the normalized reconstruction filter of pixel j, s the projection of x1).
 Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sampler& sampler, int x, int y,
-                                bool mirror, const PathSettings& settings, RayCounter& rays) {
+                                const FilmStratum& stratum, bool mirror, const PathSettings& settings, RayCounter& rays) {
+    if (form.image_space_first_vertex()) return sample_image_space(scene, form, sampler, x, y, stratum, settings, rays);
     const Sensor& sensor = *scene.sensor;
     const ReconstructionFilter& filter = *sensor.film->rfilter;
     const FilmSample fs = sample_film(filter, sampler, mirror);
@@ -82,7 +107,8 @@ PixelSums forward_batch(const Scene& scene, const Parameters& params, const Diff
                         const std::function<void(float)>& progress) {
     const Film& film = *scene.sensor->film;
     PixelSums out{Image(film.width, film.height), Image(film.width, film.height)};
-    const MaterialForm form(params);
+    const MaterialForm form(scene, params, options.first_vertex);
+    const bool antithetic = options.antithetic && !form.image_space_first_vertex();
     const PathSettings settings = options.path;
     for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
         Sampler sampler;
@@ -94,10 +120,11 @@ PixelSums forward_batch(const Scene& scene, const Parameters& params, const Diff
                 const uint64_t pixel = uint64_t(y) * film.width + x;
                 Vec3d primal(0.0), derivative(0.0);
                 for (int m = 0; m < options.spp; ++m) {
-                    const bool mirror = options.antithetic && (m & 1);
-                    sampler.start(seed, pixel, uint64_t(options.antithetic ? m / 2 : m));
+                    const bool mirror = antithetic && (m & 1);
+                    sampler.start(seed, pixel, uint64_t(antithetic ? m / 2 : m));
                     tape.clear();
-                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, mirror, settings, rays);
+                    const FilmStratum stratum{uint32_t(m), uint32_t(options.spp), uint32_t(mix_bits(seed ^ pixel))};
+                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, settings, rays);
                     if (!finite(c)) continue;
                     tape.forward(params.direction().data(), tangent);
                     primal += Vec3d(c.x.v, c.y.v, c.z.v);
@@ -146,7 +173,8 @@ Gradient render_gradient(const Scene& scene, const Parameters& params, const Ima
                     std::to_string(film.height));
     if (options.spp <= 0) throw Error("gradient: spp must be positive");
     const auto start = std::chrono::steady_clock::now();
-    const MaterialForm form(params);
+    const MaterialForm form(scene, params, options.first_vertex);
+    const bool antithetic = options.antithetic && !form.image_space_first_vertex();
     const size_t dim = size_t(params.dimension());
     tbb::enumerable_thread_specific<std::vector<double>> gradients([dim] { return std::vector<double>(dim, 0.0); });
     Gradient result{std::vector<double>(dim, 0.0), Image(film.width, film.height), 0.0};
@@ -165,10 +193,11 @@ Gradient render_gradient(const Scene& scene, const Parameters& params, const Ima
                 const Color3f a = adjoint.at(x, y) * inv_spp;
                 Vec3d primal(0.0);
                 for (int m = 0; m < options.spp; ++m) {
-                    const bool mirror = options.antithetic && (m & 1);
-                    sampler.start(options.seed, pixel, uint64_t(options.antithetic ? m / 2 : m));
+                    const bool mirror = antithetic && (m & 1);
+                    sampler.start(options.seed, pixel, uint64_t(antithetic ? m / 2 : m));
                     tape.clear();
-                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, mirror, options.path, rays);
+                    const FilmStratum stratum{uint32_t(m), uint32_t(options.spp), uint32_t(mix_bits(options.seed ^ pixel))};
+                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, options.path, rays);
                     if (!finite(c)) continue;
                     primal += Vec3d(c.x.v, c.y.v, c.z.v);
                     seeds[0] = {c.x.id, a.x};

@@ -4,6 +4,7 @@
 //   reverse mode  dL/dθ = Σ_pixels ∂L/∂I · dI/dθ for every enabled parameter (a gradient vector).
 #pragma once
 #include "core/image.h"
+#include "diff/first_vertex.h"
 #include "diff/parameters.h"
 #include "render/path_tracer.h"
 
@@ -15,7 +16,8 @@ struct DiffOptions {
     int spp = 16;              // samples per pixel (per batch)
     uint64_t seed = 0;
     int threads = 0;           // 0 = all
-    bool antithetic = true;    // pixel-level antithetic pairs (paper 001 §5.1, Fig. 6)
+    bool antithetic = true;    // pixel-level antithetic pairs (paper 001 §5.1, Fig. 6; material-form first vertex)
+    FirstVertex first_vertex = FirstVertex::Auto; // diff/first_vertex.h
     int batches = 1;           // independent batches, for per-pixel standard errors (forward mode)
     PathSettings path;         // depth limits of the path sampler
     std::function<void(float)> progress;

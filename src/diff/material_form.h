@@ -1,7 +1,9 @@
 // The material-form parameterization of paper 001 §4.1: a path is sampled in the reference configuration as
 // material points (triangle, barycentrics) and re-evaluated on the spatial geometry x = X(p, θ), with the area
 // Jacobian J(p) = dA(x)/dA(p) (Eq. 17). X is evaluated at θ0 (the identity) with its exact first derivative.
+// The first vertex may instead be parameterized by its camera ray (diff/first_vertex.h).
 #pragma once
+#include "diff/first_vertex.h"
 #include "diff/parameters.h"
 #include "scene/shape_interaction.h"
 
@@ -43,11 +45,30 @@ struct MovedVertices {
 // X(·, θ) for every shape and the camera.
 class MaterialForm {
 public:
-    explicit MaterialForm(const Parameters& params) : params_(params) {}
+    MaterialForm(const Scene& scene, const Parameters& params, FirstVertex first_vertex)
+        : params_(params), image_space_first_vertex_(penumbra::image_space_first_vertex(scene, params, first_vertex)) {}
+
+    // Whether the first path vertex is parameterized by its (fixed) camera ray instead of its material point.
+    bool image_space_first_vertex() const { return image_space_first_vertex_; }
 
     // The spatial interaction x = X(p, θ) at the material point of `hit` (wi and t are left unset).
     SurfaceInteraction<Var> vertex(const SurfaceInteraction3f& hit) const {
-        return surface_interaction<Var>(*hit.shape, hit.prim_index, hit.bary, vertices(*hit.shape));
+        return surface_interaction<Var>(*hit.shape, hit.prim_index, Vec2<Var>(hit.bary), vertices(*hit.shape));
+    }
+    // The point where the fixed ray meets the moving triangle of `hit` (the image-space first vertex): its
+    // barycentrics b(θ) solve o + t d = X(p0) + b1 (X(p1) − X(p0)) + b2 (X(p2) − X(p0)) on the tape
+    // (Möller–Trumbore), so x(θ) slides along the ray with the surface.
+    SurfaceInteraction<Var> ray_vertex(const SurfaceInteraction3f& hit, const Ray& ray) const {
+        const MovedVertices moved = vertices(*hit.shape);
+        const uint32_t* i = &hit.shape->mesh.indices[3 * size_t(hit.prim_index)];
+        const Vec3<Var> p0 = moved.position(i[0]), e1 = moved.position(i[1]) - p0, e2 = moved.position(i[2]) - p0;
+        const Vec3<Var> d(ray.d), s = Vec3<Var>(ray.o) - p0;
+        const Vec3<Var> q = cross(d, e2), r = cross(s, e1);
+        const Var inv_det = Var(1.f) / dot(e1, q);
+        // Values from the reference hit (Embree's), derivatives from the solve.
+        const Var b1 = dot(s, q) * inv_det, b2 = dot(d, r) * inv_det;
+        const Vec2<Var> bary(Var(hit.bary.x, b1.id), Var(hit.bary.y, b2.id));
+        return surface_interaction<Var>(*hit.shape, hit.prim_index, bary, moved);
     }
     // A vertex of a shape at X(p, θ).
     Vec3<Var> position(const Shape& shape, uint32_t v) const { return vertices(shape).position(v); }
@@ -91,6 +112,7 @@ public:
 private:
     MovedVertices vertices(const Shape& shape) const { return {shape, params_.motions(&shape)}; }
     const Parameters& params_;
+    bool image_space_first_vertex_;
 };
 
 } // namespace penumbra

@@ -2,43 +2,52 @@
 
 #include "diff/material_form.h"
 
+#include <cmath>
+
 namespace penumbra {
 
-bool needs_pixel_boundary(const Scene& scene) { return scene.sensor->film->rfilter->plugin == "box"; }
+bool needs_pixel_boundary(const Scene& scene, const Parameters& params, FirstVertex first_vertex) {
+    return scene.sensor->film->rfilter->plugin == "box" && !image_space_first_vertex(scene, params, first_vertex);
+}
 
 namespace {
 
-// One sample: a point s on a pixel edge (uniform over the total edge length), L(s) by path tracing, splats of
-// ∓L / pdf just inside the pixels on either side, and the velocity ṡ · x̂ (or ŷ) on the tape.
-BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, const PathSettings& settings,
-                                 Sampler& sampler, RayCounter& rays) {
+// The pixel edges as unit segments: vertical ones x = k, y ∈ [row, row + 1] (k = 0..W, one per row), then
+// horizontal ones y = k, x ∈ [column, column + 1]; each is cut into `strata` equal parts with one sample each.
+struct PixelEdges {
+    int width, height, strata;
+    uint64_t segments() const { return uint64_t(width + 1) * height + uint64_t(height + 1) * width; }
+    uint64_t samples() const { return segments() * uint64_t(strata); }
+};
+
+// Sample i: stratum j of a unit segment. A pixel's opposite edges (and all edges of a row or column) use the
+// same offset along the edge and the same random numbers for the path traced there (the sampler is restarted
+// per row/column and stratum), so that what flows in through one edge and out through the other cancels
+// sample by sample where the image is smooth, instead of only in expectation.
+BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, const PixelEdges& grid,
+                                 const PathSettings& settings, uint64_t seed, uint64_t i, Sampler& sampler,
+                                 RayCounter& rays) {
     BoundarySample out;
     const Sensor& sensor = *scene.sensor;
-    const int W = sensor.film->width, H = sensor.film->height;
-    const float vertical = float(W + 1) * H, total = vertical + float(H + 1) * W;
-    // The edge: a vertical line x = k (length H) or a horizontal line y = k (length W), and a point on it.
-    const float u = sampler.next_1d() * total, v = sampler.next_1d();
-    const bool is_vertical = u < vertical;
-    Vec2f s, across;
-    int k, extent;
-    if (is_vertical) {
-        k = std::min(int(u / H), W);
-        s = Vec2f(float(k), v * H);
-        across = Vec2f(1.f, 0.f);
-        extent = W;
-    } else {
-        k = std::min(int((u - vertical) / W), H);
-        s = Vec2f(v * W, float(k));
-        across = Vec2f(0.f, 1.f);
-        extent = H;
-    }
+    const int W = grid.width, H = grid.height;
+    const uint64_t segment = i / uint64_t(grid.strata), j = i % uint64_t(grid.strata);
+    const uint64_t vertical = uint64_t(W + 1) * H;
+    const bool is_vertical = segment < vertical;
+    // The segment's line k, its position along the line (row or column) and the line family's stream.
+    const uint64_t along = is_vertical ? segment / uint64_t(W + 1) : (segment - vertical) / uint64_t(H + 1);
+    const int k = int(is_vertical ? segment % uint64_t(W + 1) : (segment - vertical) % uint64_t(H + 1));
+    const int extent = is_vertical ? W : H;
+    sampler.start(seed, (is_vertical ? along : uint64_t(H) + along) * uint64_t(grid.strata) + j, 0);
+    const float t = float(along) + (float(j) + sampler.next_1d()) / float(grid.strata);
+    const Vec2f s = is_vertical ? Vec2f(float(k), t) : Vec2f(t, float(k));
+    const Vec2f across = is_vertical ? Vec2f(1.f, 0.f) : Vec2f(0.f, 1.f);
 
     // L(s): the radiance seen through s (the same on both sides of the edge, the filter alone jumps).
     const auto [ray, ray_weight] = sensor.sample_ray(s, sampler.next_2d());
     ++rays.rays;
     const SurfaceInteraction3f hit = scene.intersect(ray);
     if (!hit.is_valid()) return out; // the environment seen directly does not move with the geometry
-    const Color3f L = trace_path<float>(scene, sampler, ray, hit, hit, ReferenceGeometry{}, settings, rays);
+    const Color3f L = trace_path<float>(scene, sampler, ray, hit, hit, ReferenceGeometry{}, settings, rays) * ray_weight;
     if (is_black(L)) return out;
 
     // ṡ · across for the material point seen at s.
@@ -49,33 +58,43 @@ BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, c
         return out;
     const Var velocity = is_vertical ? s_t.x - Var(s.x) : s_t.y - Var(s.y);
 
-    // The pixel before the line (outward normal +across) loses what crosses it, the one after gains it.
-    const float pdf = 1.f / total, nudge = 1e-3f;
-    if (k > 0) out.add_splat(s - across * nudge, L * (-1.f / pdf));
-    if (k < extent) out.add_splat(s + across * nudge, L * (1.f / pdf));
-    out.velocity = velocity;
+    // The pixel before the line (outward normal +across) loses what crosses it, the one after gains it. Each
+    // unit segment is a stratum of the total edge length, so 1/pdf = the number of segments.
+    const float inv_pdf = float(grid.segments()), nudge = 1e-3f;
+    if (k > 0) out.add_splat(s - across * nudge, L * -inv_pdf, velocity);
+    if (k < extent) out.add_splat(s + across * nudge, L * inv_pdf, velocity);
     return out;
 }
 
 constexpr uint64_t Salt = 0x4CF5AD432745937FULL;
 
+PixelEdges pixel_edges(const Film& film, const BoundaryOptions& options) {
+    PixelEdges grid{film.width, film.height, 1};
+    // The budget per pixel spread evenly over the ~2 edge segments per pixel.
+    grid.strata = std::max(1, int(std::lround(double(options.samples_per_pixel) * film.width * film.height / double(grid.segments()))));
+    return grid;
+}
+
 } // namespace
 
 Image PixelBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
-    if (!needs_pixel_boundary(scene_)) return Image(scene_.sensor->film->width, scene_.sensor->film->height);
-    const MaterialForm form(params);
-    return boundary_derivative(scene_, params, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
-        return sample_pixel_edge(scene_, form, options.path, sampler, rays);
-    });
+    const Film& film = *scene_.sensor->film;
+    if (!needs_pixel_boundary(scene_, params, options.first_vertex)) return Image(film.width, film.height);
+    const MaterialForm form(scene_, params, options.first_vertex);
+    const PixelEdges grid = pixel_edges(film, options);
+    return boundary_derivative(scene_, params, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+        return sample_pixel_edge(scene_, form, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
+    }, grid.samples());
 }
 
 void PixelBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
                              std::vector<double>& gradient) const {
-    if (!needs_pixel_boundary(scene_)) return;
-    const MaterialForm form(params);
-    boundary_gradient(scene_, adjoint, options, Salt, [&](Sampler& sampler, RayCounter& rays) {
-        return sample_pixel_edge(scene_, form, options.path, sampler, rays);
-    }, gradient);
+    if (!needs_pixel_boundary(scene_, params, options.first_vertex)) return;
+    const MaterialForm form(scene_, params, options.first_vertex);
+    const PixelEdges grid = pixel_edges(*scene_.sensor->film, options);
+    boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+        return sample_pixel_edge(scene_, form, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
+    }, gradient, grid.samples());
 }
 
 } // namespace penumbra

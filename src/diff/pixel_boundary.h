@@ -4,21 +4,23 @@
 //     −∮_{∂pixel j} L(s) (ṡ(s) · n_out(s)) dℓ(s),
 // with ṡ the film-space velocity of the material point seen at s (first order, on the tape) and n_out the
 // pixel's outward normal; the interior term, whose filter is constant inside the pixel, misses it. Continuous
-// filters (tent, gaussian) need no such term. Points are drawn uniformly on all pixel edges of the film; each
-// interior edge point contributes to the two pixels it separates.
+// filters (tent, gaussian) need no such term, and neither does the image-space first vertex (its filter does
+// not move; diff/first_vertex.h). Points are stratified along every pixel edge, with the same offsets and
+// random numbers on a pixel's opposite edges; each interior edge point contributes to the two pixels it
+// separates.
 #pragma once
 #include "core/image.h"
 #include "diff/boundary_driver.h"
 
 namespace penumbra {
 
-// Whether the scene's film needs the pixel-boundary term (a box filter).
-bool needs_pixel_boundary(const Scene& scene);
+// Whether the pixel-boundary term is needed: a box filter and a material-form first vertex.
+bool needs_pixel_boundary(const Scene& scene, const Parameters& params, FirstVertex first_vertex);
 
 class PixelBoundary final : public BoundaryTerm {
 public:
     explicit PixelBoundary(const Scene& scene) : scene_(scene) {}
-    // Both are zero (and cost nothing) unless the film has a box filter.
+    // Both are zero (and cost nothing) unless needs_pixel_boundary().
     Image derivative(const Parameters& params, const BoundaryOptions& options) const override;
     void gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
                   std::vector<double>& gradient) const override;

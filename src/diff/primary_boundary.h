@@ -1,10 +1,13 @@
-// The primary boundary term: the last path segment x_N -> camera is a boundary segment (paper 001 §4.3,
-// Fig. 5-b). With the interior term in material form, the occluder's own material domain is fixed and only the
-// background's is cut by the silhouette; in image space the term for pixel j is
-//     ∫_silhouettes P_j(s) (−L_bg(s)) ((u_edge(s) − u_bg(s)) · n(s)) dℓ(s),
-// with u the image-space velocities of the edge point and of the background point seen next to it, n the
-// image-space normal pointing from the occluder to the background, and L_bg the radiance seen on the
-// background side. Silhouette edges are sampled uniformly by projected length.
+// The primary boundary term: the last path segment x_1 -> camera is a boundary segment (paper 001 §4.3,
+// Fig. 5-b). For pixel j it integrates, along the image of the edges where the radiance seen through the film
+// jumps, the jump times the discontinuity's image-space normal velocity:
+//   image-space first vertex (diff/first_vertex.h): the camera rays are fixed, and the image jumps at
+//     silhouettes and at creases of face-normal meshes:  ∫ P_j(s) (L_a(s) − L_b(s)) (u_edge(s) · n(s)) dℓ(s);
+//   material-form first vertex: the occluder's own material domain is fixed and only the background's is cut
+//     by the silhouette:  ∫ P_j(s) (−L_bg(s)) ((u_edge(s) − u_bg(s)) · n(s)) dℓ(s),
+// with u the image-space velocities of the edge point and of the background's material point seen next to it,
+// n the image-space normal pointing from side a (the occluder) to side b (the background), and L the radiance
+// seen on either side. Edges are sampled by the length of their image within the film.
 #pragma once
 #include "core/image.h"
 #include "diff/boundary_driver.h"
@@ -16,7 +19,8 @@ namespace penumbra {
 
 class PrimaryBoundary final : public BoundaryTerm {
 public:
-    // Selects, among the scene's discontinuity edges, the silhouettes seen from the reference camera.
+    // `edges` (the scene's discontinuity edges) must outlive the estimator; the ones seen by the camera are
+    // selected per call (which depends on the first vertex's parameterization).
     PrimaryBoundary(const Scene& scene, const SceneEdges& edges);
     ~PrimaryBoundary() override;
     Image derivative(const Parameters& params, const BoundaryOptions& options) const override;
@@ -27,7 +31,7 @@ public:
 
 private:
     const Scene& scene_;
-    std::unique_ptr<const Silhouettes> silhouettes_;
+    const SceneEdges& edges_;
 };
 
 } // namespace penumbra

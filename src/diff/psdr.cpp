@@ -26,6 +26,7 @@ void boundary_batches(const Scene& scene, const Parameters& params, const PsdrOp
         bo.seed = options.interior.seed + salt * uint64_t(b + 1);
         bo.threads = options.interior.threads;
         bo.path = options.interior.path;
+        bo.first_vertex = options.interior.first_vertex;
         batches.add(term.derivative(params, bo));
     }
     mean = batches.mean();
@@ -102,6 +103,7 @@ Gradient psdr_gradient(const Scene& scene, const Parameters& params, const Image
     BoundaryOptions bo;
     bo.threads = options.interior.threads;
     bo.path = options.interior.path;
+    bo.first_vertex = options.interior.first_vertex;
     const BoundaryTerms boundary(scene, options);
     for (const BoundaryTerms::Term& t : boundary.terms()) {
         if (t.spp <= 0) continue;

@@ -13,6 +13,7 @@ struct RenderOptions {
     int spp = 0;          // samples per pixel; 0 = the scene sampler's sample_count
     uint64_t seed = 0;    // the image is bit-identical for a given seed whatever the thread count
     int threads = 0;      // 0 = all hardware threads
+    bool stratified = false; // film positions stratified within each pixel (core/stratified.h) instead of independent
     // Called with the completed fraction in [0,1] (from worker threads, serialized).
     std::function<void(float)> progress;
 };

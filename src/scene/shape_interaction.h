@@ -16,31 +16,32 @@ struct MeshVertices {
 // Mitsuba 3 mesh interaction: p from barycentrics, n = face normal, shading normal = normalized interpolated
 // vertex normal, shading tangent s = Gram-Schmidt of dp/du against it, where dp/du solves
 // [p1-p0, p2-p0] = [dp/du, dp/dv] [uv1-uv0, uv2-uv0] (coordinate_system(n) without uvs or when singular).
-// `t` and `wi` are left for the caller (they depend on the ray or the neighbouring path vertex).
+// `t` and `wi` are left for the caller (they depend on the ray or the neighbouring path vertex). The
+// barycentrics are in T too: a fixed material point has constant ones; the point where a fixed ray meets a
+// moving triangle has barycentrics that depend on θ (diff/material_form.h).
 template <typename T, typename Vertices>
-SurfaceInteraction<T> surface_interaction(const Shape& shape, uint32_t prim, const Vec2f& bary, const Vertices& vertices) {
+SurfaceInteraction<T> surface_interaction(const Shape& shape, uint32_t prim, const Vec2<T>& bary, const Vertices& vertices) {
     using std::sqrt;
     const TriangleMesh& mesh = shape.mesh;
     const uint32_t* i = &mesh.indices[3 * size_t(prim)];
     const Vec3<T> p0 = vertices.position(i[0]), p1 = vertices.position(i[1]), p2 = vertices.position(i[2]);
-    const float b1 = bary.x, b2 = bary.y, b0 = 1.f - b1 - b2;
+    const T b1 = bary.x, b2 = bary.y, b0 = T(1.f) - b1 - b2;
     const Vec3<T> dp0 = p1 - p0, dp1 = p2 - p0;
 
     SurfaceInteraction<T> si;
-    si.p = p0 * T(b0) + p1 * T(b1) + p2 * T(b2);
+    si.p = p0 * b0 + p1 * b1 + p2 * b2;
     si.n = normalize(cross(dp0, dp1));
-    si.bary = bary;
+    si.bary = Vec2f(detach(b1), detach(b2));
     si.shape = &shape;
     si.prim_index = prim;
 
     Vec3<T> dp_du, dp_dv;
     coordinate_system(si.n, dp_du, dp_dv);
     if (mesh.uvs.empty()) {
-        si.uv = Vec2<T>(T(b1), T(b2));
+        si.uv = Vec2<T>(b1, b2);
     } else {
         const Vec2f uv0 = mesh.uvs[i[0]], uv1 = mesh.uvs[i[1]], uv2 = mesh.uvs[i[2]];
-        const Vec2f uv = uv0 * b0 + uv1 * b1 + uv2 * b2;
-        si.uv = Vec2<T>(T(uv.x), T(uv.y));
+        si.uv = Vec2<T>(uv0) * b0 + Vec2<T>(uv1) * b1 + Vec2<T>(uv2) * b2;
         const Vec2f duv0 = uv1 - uv0, duv1 = uv2 - uv0;
         const float det = duv0.x * duv1.y - duv0.y * duv1.x;
         if (det != 0.f) dp_du = (dp0 * T(duv1.y) - dp1 * T(duv0.y)) / T(det);
@@ -49,7 +50,7 @@ SurfaceInteraction<T> surface_interaction(const Shape& shape, uint32_t prim, con
     Vec3<T> ns = si.n;
     if (!shape.face_normals && !mesh.normals.empty()) {
         const Vec3<T> interpolated =
-            vertices.normal(i[0]) * T(b0) + vertices.normal(i[1]) * T(b1) + vertices.normal(i[2]) * T(b2);
+            vertices.normal(i[0]) * b0 + vertices.normal(i[1]) * b1 + vertices.normal(i[2]) * b2;
         const T length = norm(interpolated);
         if (length > T(0) && std::isfinite(detach(length))) ns = interpolated / length;
     }

@@ -20,6 +20,8 @@ public:
     // Average value over the texture's domain.
     virtual Color3f mean() const = 0;
     virtual bool is_constant() const { return false; }
+    // Whether the value is continuous in uv (a checkerboard or a nearest-neighbour bitmap jumps).
+    virtual bool is_continuous() const { return true; }
 };
 
 // CRTP helper: a texture implements `template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>&) const`.

@@ -56,6 +56,7 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
     }
 
     Color3f mean() const override { return mean_; }
+    bool is_continuous() const override { return bilinear_; }
     std::string to_string() const override {
         return "BitmapTexture[" + name_ + ", " + std::to_string(image_.width) + "x" +
                std::to_string(image_.height) + "]";

@@ -27,6 +27,7 @@ class CheckerboardTexture final : public TextureBase<CheckerboardTexture> {
         return mu == mv ? color0_->eval(si) : color1_->eval(si);
     }
     Color3f mean() const override { return (color0_->mean() + color1_->mean()) * 0.5f; }
+    bool is_continuous() const override { return false; }
 
   private:
     std::shared_ptr<Texture> color0_, color1_;
