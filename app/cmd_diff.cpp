@@ -2,6 +2,7 @@
 #include "cli.h"
 
 #include "core/colormap.h"
+#include "diff/budget.h"
 #include "diff/finite_difference.h"
 #include "diff/interior.h"
 #include "diff/path_sampling.h"
@@ -25,7 +26,9 @@ struct Common {
     std::string scene;
     std::string method = "psdr";
     std::string first_vertex = "auto";
-    int boundary_spp = 4;
+    // Per-term samples per pixel for experts (-1: unset). Unset everywhere: --spp is the total budget, split by
+    // a calibration pass (diff/budget.h).
+    int boundary_spp = -1, primary_spp = -1, direct_spp = -1, indirect_spp = -1, pixel_spp = -1;
     std::vector<std::string> defines, params;
     int spp = 64, threads = 0, batches = 0;
     uint64_t seed = 0;
@@ -56,7 +59,14 @@ void add_method(CLI::App* cmd, Common& c) {
                     "interior (material-form interior term only), psdr (interior + boundary) or paths (path sampling "
                     "methods of paper 002, non-geometric parameters only)")
         ->check(CLI::IsMember({"interior", "psdr", "paths"}));
-    cmd->add_option("--boundary-spp", c.boundary_spp, "samples per pixel of each boundary term")->check(CLI::NonNegativeNumber);
+    cmd->add_option("--boundary-spp", c.boundary_spp,
+                    "samples per pixel of each boundary term (experts; by default --spp is a total budget that a "
+                    "calibration pass splits over the terms)")
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--primary-spp", c.primary_spp, "samples per pixel of the primary boundary term (experts)")->check(CLI::NonNegativeNumber);
+    cmd->add_option("--direct-spp", c.direct_spp, "samples per pixel of the direct boundary term (experts)")->check(CLI::NonNegativeNumber);
+    cmd->add_option("--indirect-spp", c.indirect_spp, "samples per pixel of the indirect boundary term (experts)")->check(CLI::NonNegativeNumber);
+    cmd->add_option("--pixel-spp", c.pixel_spp, "samples per pixel of the pixel-boundary term (experts)")->check(CLI::NonNegativeNumber);
     cmd->add_option("--first-vertex", c.first_vertex,
                     "parameterization of the vertex the camera sees: image (fixed camera rays; needs a static camera), "
                     "material (material points; the filter and pixel edges move) or auto (image unless the camera "
@@ -93,8 +103,8 @@ std::string path_sampling_name(const Common& c) {
     return c.sampling + " sampling" + (c.no_nee ? "" : " + NEE") + (c.adaptive ? " + adaptive pixels" : "");
 }
 
-// The terms' budgets from the command line (the sample count is split over the batches).
-PsdrOptions psdr_options(const Scene& scene, const Common& c, int batches, bool antithetic) {
+// The options shared by every psdr run from the command line; the per-term budgets are set by the callers.
+PsdrOptions psdr_base(const Scene& scene, const Common& c, int batches, bool antithetic) {
     PsdrOptions o;
     o.interior.batches = batches;
     o.interior.spp = c.spp / batches;
@@ -103,11 +113,26 @@ PsdrOptions psdr_options(const Scene& scene, const Common& c, int batches, bool 
     o.interior.antithetic = antithetic;
     o.interior.path = path_settings(scene);
     o.interior.first_vertex = parse_first_vertex(c.first_vertex);
-    o.primary_spp = c.method == "psdr" && c.boundary_spp > 0 ? std::max(1, c.boundary_spp / batches) : 0;
-    o.direct_spp = o.primary_spp;
-    o.indirect_spp = o.primary_spp;
-    o.pixel_spp = o.primary_spp;
+    o.primary_spp = o.direct_spp = o.indirect_spp = o.pixel_spp = 0;
     return o;
+}
+
+bool manual_budget(const Common& c) {
+    return c.boundary_spp >= 0 || c.primary_spp >= 0 || c.direct_spp >= 0 || c.indirect_spp >= 0 || c.pixel_spp >= 0;
+}
+
+// Expert budgets: the interior gets --spp, each boundary term its own flag, else --boundary-spp, else --spp
+// (split over the batches).
+void set_manual_budget(PsdrOptions& o, const Common& c, int batches) {
+    const int fallback = c.boundary_spp >= 0 ? c.boundary_spp : c.spp;
+    auto per_batch = [&](int term) {
+        const int spp = term >= 0 ? term : fallback;
+        return spp > 0 ? std::max(1, spp / batches) : 0;
+    };
+    o.primary_spp = per_batch(c.primary_spp);
+    o.direct_spp = per_batch(c.direct_spp);
+    o.indirect_spp = per_batch(c.indirect_spp);
+    o.pixel_spp = per_batch(c.pixel_spp);
 }
 
 std::vector<std::pair<std::string, std::vector<float>>> selection(const std::vector<std::string>& params) {
@@ -176,13 +201,20 @@ void cmd_derivative(const Common& c, bool no_antithetic) {
     Parameters params(*scene);
     params.enable(selection(c.params));
     if (c.method == "paths") return cmd_derivative_paths(c, *scene, params);
-    PsdrOptions o = psdr_options(*scene, c, batches_for(c), !no_antithetic);
+    const int batches = batches_for(c);
+    const bool total = c.method == "psdr";
+    PsdrOptions o = psdr_base(*scene, c, batches, !no_antithetic);
+    const auto start = std::chrono::steady_clock::now();
+    if (total && manual_budget(c)) set_manual_budget(o, c, batches);
+    else if (total) {
+        if (!c.quiet) std::fprintf(stderr, "calibrating the terms' budgets...\n");
+        o = psdr_budget(*scene, params, o, c.spp);
+    }
+    if (total && !c.quiet) std::fprintf(stderr, "budget: %s%s\n", describe_budget(o).c_str(), manual_budget(c) ? "" : " (calibrated)");
     ProgressBar bar(!c.quiet, "derivative");
     o.interior.progress = bar.callback();
-    const auto start = std::chrono::steady_clock::now();
     const PsdrDerivative d = psdr_derivative(*scene, params, o);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const bool total = c.method == "psdr";
     write_signed(c.output, total ? d.total : d.interior.derivative);
     if (!c.stderr_output.empty()) write_image(c.stderr_output, total ? d.total_stderr : d.interior.stderr_img);
     if (!c.terms_prefix.empty()) {
@@ -192,12 +224,20 @@ void cmd_derivative(const Common& c, bool no_antithetic) {
         if (total) write_signed(c.terms_prefix + "_indirect" + lower_extension(c.output), d.indirect);
         if (total && needs_pixel_boundary(*scene, params, o.interior.first_vertex)) write_signed(c.terms_prefix + "_pixel" + lower_extension(c.output), d.pixel);
     }
+    if (total && !c.quiet) {
+        std::fprintf(stderr, "%-9s %12s %10s %12s %9s\n", "term", "samples", "rays/smp", "tape/smp", "seconds");
+        for (size_t k = 0; k < d.cost.size(); ++k) {
+            const SampleCost& t = d.cost[k];
+            if (t.samples == 0) continue;
+            std::fprintf(stderr, "%-9s %12llu %10.2f %12.1f %9.2f\n", PsdrTermNames[k], (unsigned long long)t.samples,
+                         double(t.rays) / double(t.samples), double(t.tape_nodes) / double(t.samples), d.seconds[k]);
+        }
+    }
     const Film& film = *scene->sensor->film;
-    std::fprintf(stderr, "derivative (%s) %dx%d at %d spp%s in %.2f s, mean %.6g -> %s\n",
-                 total ? "interior + primary, direct and indirect boundary" : "interior term", film.width, film.height,
-                 o.interior.spp * o.interior.batches,
-                 total ? (", " + std::to_string(o.primary_spp * o.interior.batches) + " boundary spp").c_str() : "",
-                 seconds, image_mean(total ? d.total : d.interior.derivative), c.output.c_str());
+    std::fprintf(stderr, "derivative (%s, %s first vertex) %dx%d, %d spp in %.2f s, mean %.6g -> %s\n",
+                 total ? "interior + boundary terms" : "interior term",
+                 image_space_first_vertex(*scene, params, o.interior.first_vertex) ? "image-space" : "material-form",
+                 film.width, film.height, c.spp, seconds, image_mean(total ? d.total : d.interior.derivative), c.output.c_str());
 }
 
 void cmd_fd(const Common& c, double eps) {
@@ -230,10 +270,10 @@ Gradient gradient_paths(const Common& c, const Scene& scene, const Parameters& p
         out["loss"] = l.loss;
         out["seconds_primal"] = l.seconds_primal;
         std::fprintf(stderr, "loss (%s) of the pass-1 image: %.6g\n", c.loss.c_str(), l.loss);
-        return {l.values, l.primal, l.seconds};
+        return {l.values, l.primal, l.seconds, {}};
     }
     const SampledGradient g = path_sampling_gradient(scene, params, read_image(c.adjoint, false), o);
-    return {g.values, g.primal, g.seconds};
+    return {g.values, g.primal, g.seconds, {}};
 }
 
 void cmd_gradient(const Common& c) {
@@ -249,10 +289,18 @@ void cmd_gradient(const Common& c) {
     if (c.method == "paths") {
         g = gradient_paths(c, *scene, params, out);
     } else {
-        PsdrOptions o = psdr_options(*scene, c, 1, true);
+        const Image adjoint = read_image(c.adjoint, false);
+        PsdrOptions o = psdr_base(*scene, c, 1, true);
+        if (c.method == "psdr" && manual_budget(c)) {
+            set_manual_budget(o, c, 1);
+        } else if (c.method == "psdr") {
+            if (!c.quiet) std::fprintf(stderr, "calibrating the terms' budgets...\n");
+            o = psdr_gradient_budget(*scene, params, adjoint, o, c.spp);
+        }
+        if (c.method == "psdr") out["budget"] = describe_budget(o);
         ProgressBar bar(!c.quiet, "gradient");
         o.interior.progress = bar.callback();
-        g = psdr_gradient(*scene, params, read_image(c.adjoint, false), o);
+        g = psdr_gradient(*scene, params, adjoint, o);
     }
     out["seconds"] = g.seconds;
     out["spp"] = c.spp;

@@ -28,6 +28,7 @@ void print_summary(const OptimizeConfig& config, const OptimizeResult& result) {
                  result.psdr ? "psdr" : "interior", config.iterations, result.seconds,
                  config.iterations ? result.seconds / config.iterations : 0.0, result.target_seconds, loss,
                  config.output.c_str());
+    if (!result.budget.empty()) std::fprintf(stderr, "  gradient budget: %s (calibrated)\n", result.budget.c_str());
     for (const ParameterResult& p : result.parameters) {
         std::fprintf(stderr, "  %-28s %s -> %s", p.name.c_str(), format_values(p.initial).c_str(),
                      format_values(p.final).c_str());

@@ -8,6 +8,7 @@
 #pragma once
 #include "diff/first_vertex.h"
 #include "diff/parameters.h"
+#include "diff/sample_cost.h"
 #include "render/film_footprint.h"
 #include "render/path_tracer.h"
 
@@ -27,6 +28,7 @@ struct BoundaryOptions {
     int threads = 0;
     PathSettings path;
     FirstVertex first_vertex = FirstVertex::Auto; // must match the interior term's (diff/first_vertex.h)
+    SampleCost* cost = nullptr;                   // if set, the samples' cost is added to it
 };
 
 struct BoundarySample {
@@ -106,12 +108,14 @@ Image boundary_derivative(const Scene& scene, const Parameters& params, const Bo
     const uint64_t n_samples = detail::sample_count(film, options, count);
     const double n = double(n_samples);
     std::vector<Image> chunks(16, Image(film.width, film.height));
+    std::array<SampleCost, 16> costs{};
     detail::for_each_sample(n_samples, options, salt, [&](int c, uint64_t i, Sampler& sampler) {
         thread_local std::vector<float> tangent;
         Tape& tape = Tape::current();
         tape.clear();
         RayCounter rays;
         const BoundarySample b = sample(BoundarySampleIndex{i, n_samples}, sampler, rays);
+        costs[c] += SampleCost{1, rays.rays, tape.size()};
         if (b.usable()) {
             tape.forward(params.direction().data(), tangent);
             for (int k = 0; k < b.n_splats; ++k) {
@@ -125,6 +129,8 @@ Image boundary_derivative(const Scene& scene, const Parameters& params, const Bo
     Image result(film.width, film.height);
     for (const Image& chunk : chunks)
         for (size_t i = 0; i < result.pixels.size(); ++i) result.pixels[i] += chunk.pixels[i];
+    if (options.cost)
+        for (const SampleCost& c : costs) *options.cost += c;
     return result;
 }
 
@@ -137,13 +143,15 @@ void boundary_gradient(const Scene& scene, const Image& adjoint, const BoundaryO
     const double n = double(n_samples);
     const size_t dim = gradient.size();
     tbb::enumerable_thread_specific<std::vector<double>> local([dim] { return std::vector<double>(dim, 0.0); });
-    detail::for_each_sample(n_samples, options, salt, [&](int, uint64_t i, Sampler& sampler) {
+    std::array<SampleCost, 16> costs{};
+    detail::for_each_sample(n_samples, options, salt, [&](int c, uint64_t i, Sampler& sampler) {
         thread_local std::vector<float> scratch;
         thread_local std::vector<std::pair<int32_t, float>> seeds;
         Tape& tape = Tape::current();
         tape.clear();
         RayCounter rays;
         const BoundarySample b = sample(BoundarySampleIndex{i, n_samples}, sampler, rays);
+        costs[c] += SampleCost{1, rays.rays, tape.size()};
         if (b.usable()) {
             seeds.clear();
             for (int k = 0; k < b.n_splats; ++k) {
@@ -158,6 +166,8 @@ void boundary_gradient(const Scene& scene, const Image& adjoint, const BoundaryO
     });
     for (const auto& g : local)
         for (size_t k = 0; k < dim; ++k) gradient[k] += g[k];
+    if (options.cost)
+        for (const SampleCost& c : costs) *options.cost += c;
 }
 
 } // namespace penumbra

@@ -104,7 +104,7 @@ struct PixelSums {
 
 // One batch of the forward-mode estimator.
 PixelSums forward_batch(const Scene& scene, const Parameters& params, const DiffOptions& options, uint64_t seed,
-                        const std::function<void(float)>& progress) {
+                        const std::function<void(float)>& progress, SharedSampleCost& cost) {
     const Film& film = *scene.sensor->film;
     PixelSums out{Image(film.width, film.height), Image(film.width, film.height)};
     const MaterialForm form(scene, params, options.first_vertex);
@@ -113,6 +113,7 @@ PixelSums forward_batch(const Scene& scene, const Parameters& params, const Diff
     for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
         Sampler sampler;
         RayCounter rays;
+        uint64_t tape_nodes = 0;
         std::vector<float> tangent;
         Tape& tape = Tape::current();
         for (int y = y0; y < y1; ++y)
@@ -125,6 +126,7 @@ PixelSums forward_batch(const Scene& scene, const Parameters& params, const Diff
                     tape.clear();
                     const FilmStratum stratum{uint32_t(m), uint32_t(options.spp), uint32_t(mix_bits(seed ^ pixel))};
                     const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, settings, rays);
+                    tape_nodes += tape.size();
                     if (!finite(c)) continue;
                     tape.forward(params.direction().data(), tangent);
                     primal += Vec3d(c.x.v, c.y.v, c.z.v);
@@ -135,6 +137,7 @@ PixelSums forward_batch(const Scene& scene, const Parameters& params, const Diff
                 out.derivative.at(x, y) = Color3f(derivative / double(options.spp));
             }
         tape.clear();
+        cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays.rays, tape_nodes});
     }, progress);
     return out;
 }
@@ -152,14 +155,15 @@ DerivativeImage render_derivative(const Scene& scene, const Parameters& params, 
     const auto start = std::chrono::steady_clock::now();
     const int B = options.batches;
     ImageBatches primal, derivative;
+    SharedSampleCost cost;
     for (int b = 0; b < B; ++b) {
         auto progress = options.progress ? std::function<void(float)>([&, b](float f) { options.progress((b + f) / B); })
                                          : std::function<void(float)>();
-        const PixelSums s = forward_batch(scene, params, options, options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b), progress);
+        const PixelSums s = forward_batch(scene, params, options, options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b), progress, cost);
         primal.add(s.primal);
         derivative.add(s.derivative);
     }
-    DerivativeImage result{primal.mean(), derivative.mean(), derivative.standard_error(), 0.0};
+    DerivativeImage result{primal.mean(), derivative.mean(), derivative.standard_error(), 0.0, cost.get()};
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
 }
@@ -177,12 +181,14 @@ Gradient render_gradient(const Scene& scene, const Parameters& params, const Ima
     const bool antithetic = options.antithetic && !form.image_space_first_vertex();
     const size_t dim = size_t(params.dimension());
     tbb::enumerable_thread_specific<std::vector<double>> gradients([dim] { return std::vector<double>(dim, 0.0); });
-    Gradient result{std::vector<double>(dim, 0.0), Image(film.width, film.height), 0.0};
+    Gradient result{std::vector<double>(dim, 0.0), Image(film.width, film.height), 0.0, {}};
     const float inv_spp = 1.f / float(options.spp);
+    SharedSampleCost cost;
 
     for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
         Sampler sampler;
         RayCounter rays;
+        uint64_t tape_nodes = 0;
         std::vector<float> scratch;
         std::vector<std::pair<int32_t, float>> seeds(3);
         std::vector<double>& gradient = gradients.local();
@@ -198,6 +204,7 @@ Gradient render_gradient(const Scene& scene, const Parameters& params, const Ima
                     tape.clear();
                     const FilmStratum stratum{uint32_t(m), uint32_t(options.spp), uint32_t(mix_bits(options.seed ^ pixel))};
                     const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, options.path, rays);
+                    tape_nodes += tape.size();
                     if (!finite(c)) continue;
                     primal += Vec3d(c.x.v, c.y.v, c.z.v);
                     seeds[0] = {c.x.id, a.x};
@@ -208,7 +215,9 @@ Gradient render_gradient(const Scene& scene, const Parameters& params, const Ima
                 result.primal.at(x, y) = Color3f(primal / double(options.spp));
             }
         tape.clear();
+        cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays.rays, tape_nodes});
     }, options.progress);
+    result.cost = cost.get();
 
     for (const std::vector<double>& g : gradients)
         for (size_t k = 0; k < dim; ++k) result.values[k] += g[k];

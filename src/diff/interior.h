@@ -6,8 +6,10 @@
 #include "core/image.h"
 #include "diff/first_vertex.h"
 #include "diff/parameters.h"
+#include "diff/sample_cost.h"
 #include "render/path_tracer.h"
 
+#include <atomic>
 #include <functional>
 
 namespace penumbra {
@@ -23,17 +25,26 @@ struct DiffOptions {
     std::function<void(float)> progress;
 };
 
+// Integer counts summed from worker threads (the total does not depend on the order).
+struct SharedSampleCost {
+    std::atomic<uint64_t> samples{0}, rays{0}, tape_nodes{0};
+    void add(const SampleCost& c) { samples += c.samples, rays += c.rays, tape_nodes += c.tape_nodes; }
+    SampleCost get() const { return {samples.load(), rays.load(), tape_nodes.load()}; }
+};
+
 struct DerivativeImage {
     Image primal;      // the image estimated from the same samples (detached values)
     Image derivative;  // dI/dθ
     Image stderr_img;  // per-pixel standard error of `derivative` (empty with a single batch)
     double seconds = 0;
+    SampleCost cost;
 };
 
 struct Gradient {
     std::vector<double> values; // dL/dθ, one per enabled parameter scalar
     Image primal;
     double seconds = 0;
+    SampleCost cost;
 };
 
 // Path settings from the scene's `path` integrator (defaults otherwise).

@@ -169,7 +169,7 @@ DerivativeImage path_sampling_derivative(const Scene& scene, const Parameters& p
         primal.add(r.primal);
         derivative.add(r.derivative);
     }
-    return {primal.mean(), derivative.mean(), derivative.standard_error(), seconds_since(start)};
+    return {primal.mean(), derivative.mean(), derivative.standard_error(), seconds_since(start), {}};
 }
 
 SampledGradient path_sampling_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,

@@ -87,7 +87,8 @@ bool shading_jumps(const Shape& shape, const Edge& e, bool textured) {
     return false;
 }
 
-std::unique_ptr<const Silhouettes> find_silhouettes(const Scene& scene, const SceneEdges& edges, bool image_space) {
+std::unique_ptr<const Silhouettes> find_silhouettes(const Scene& scene, const SceneEdges& edges, const Parameters& params,
+                                                    bool image_space) {
     const Sensor& sensor = *scene.sensor;
     const Film& film = *sensor.film;
     const bool parallel = parallel_projection(sensor);
@@ -103,6 +104,8 @@ std::unique_ptr<const Silhouettes> find_silhouettes(const Scene& scene, const Sc
     const Shape* textured_shape = nullptr; // the shape `textured` was last found for (edges come shape by shape)
     bool textured = false;
     for (const SceneEdges::SceneEdge& se : edges.edges) {
+        // In image space an edge of a shape that does not move is a discontinuity that does not move.
+        if (image_space && params.motions(se.shape).empty() && se.shape->vertex_param_index < 0) continue;
         const TriangleMesh& m = se.shape->mesh;
         const Edge& e = se.edge;
         const bool silhouette = parallel ? is_silhouette_parallel(m, e, forward) : is_silhouette(m, e, eye);
@@ -245,7 +248,7 @@ PrimaryBoundary::~PrimaryBoundary() = default;
 
 Image PrimaryBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
     const MaterialForm form(scene_, params, options.first_vertex);
-    const auto silhouettes = find_silhouettes(scene_, edges_, form.image_space_first_vertex());
+    const auto silhouettes = find_silhouettes(scene_, edges_, params, form.image_space_first_vertex());
     if (silhouettes->edges.empty()) return Image(scene_.sensor->film->width, scene_.sensor->film->height);
     return boundary_derivative(scene_, params, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
         return sample_boundary(scene_, *silhouettes, form, index, sampler, options.path, rays);
@@ -255,7 +258,7 @@ Image PrimaryBoundary::derivative(const Parameters& params, const BoundaryOption
 void PrimaryBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
                                std::vector<double>& gradient) const {
     const MaterialForm form(scene_, params, options.first_vertex);
-    const auto silhouettes = find_silhouettes(scene_, edges_, form.image_space_first_vertex());
+    const auto silhouettes = find_silhouettes(scene_, edges_, params, form.image_space_first_vertex());
     if (silhouettes->edges.empty()) return;
     boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
         return sample_boundary(scene_, *silhouettes, form, index, sampler, options.path, rays);

@@ -13,7 +13,7 @@ namespace {
 
 // Mean and standard error over batches of a boundary term (run with independent seeds).
 void boundary_batches(const Scene& scene, const Parameters& params, const PsdrOptions& options, const BoundaryTerm& term,
-                      int spp, uint64_t salt, Image& mean, Image& stderr_img) {
+                      int spp, uint64_t salt, Image& mean, Image& stderr_img, SampleCost& cost) {
     const Film& film = *scene.sensor->film;
     const int B = options.interior.batches;
     mean = Image(film.width, film.height);
@@ -27,6 +27,7 @@ void boundary_batches(const Scene& scene, const Parameters& params, const PsdrOp
         bo.threads = options.interior.threads;
         bo.path = options.interior.path;
         bo.first_vertex = options.interior.first_vertex;
+        bo.cost = &cost;
         batches.add(term.derivative(params, bo));
     }
     mean = batches.mean();
@@ -65,7 +66,15 @@ private:
 
 PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, const PsdrOptions& options) {
     PsdrDerivative out;
-    out.interior = render_derivative(scene, params, options.interior);
+    const Film& film = *scene.sensor->film;
+    if (options.interior.spp > 0) {
+        out.interior = render_derivative(scene, params, options.interior);
+    } else {
+        out.interior.derivative = Image(film.width, film.height);
+        if (options.interior.batches > 1) out.interior.stderr_img = Image(film.width, film.height);
+    }
+    out.cost[0] = out.interior.cost;
+    out.seconds[0] = out.interior.seconds;
     const BoundaryTerms boundary(scene, options);
     const std::array<std::pair<Image*, Image*>, 4> images = {{{&out.primary, &out.primary_stderr},
                                                               {&out.direct, &out.direct_stderr},
@@ -73,9 +82,11 @@ PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, con
                                                               {&out.pixel, &out.pixel_stderr}}};
     for (size_t k = 0; k < images.size(); ++k) {
         const BoundaryTerms::Term& t = boundary.terms()[k];
-        boundary_batches(scene, params, options, t.estimator, t.spp, t.salt, *images[k].first, *images[k].second);
+        const auto start = std::chrono::steady_clock::now();
+        boundary_batches(scene, params, options, t.estimator, t.spp, t.salt, *images[k].first, *images[k].second,
+                         out.cost[k + 1]);
+        out.seconds[k + 1] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
-    const Film& film = *scene.sensor->film;
     out.total = out.interior.derivative;
     const bool have_se = options.interior.batches > 1;
     if (have_se) out.total_stderr = Image(film.width, film.height);
@@ -99,11 +110,14 @@ PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, con
 
 Gradient psdr_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const PsdrOptions& options) {
     const auto start = std::chrono::steady_clock::now();
-    Gradient g = render_gradient(scene, params, adjoint, options.interior);
+    Gradient g;
+    if (options.interior.spp > 0) g = render_gradient(scene, params, adjoint, options.interior);
+    else g.values.assign(size_t(params.dimension()), 0.0);
     BoundaryOptions bo;
     bo.threads = options.interior.threads;
     bo.path = options.interior.path;
     bo.first_vertex = options.interior.first_vertex;
+    bo.cost = &g.cost;
     const BoundaryTerms boundary(scene, options);
     for (const BoundaryTerms::Term& t : boundary.terms()) {
         if (t.spp <= 0) continue;

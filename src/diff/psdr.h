@@ -10,10 +10,12 @@
 #include "diff/pixel_boundary.h"
 #include "diff/primary_boundary.h"
 
+#include <array>
+
 namespace penumbra {
 
 struct PsdrOptions {
-    DiffOptions interior;
+    DiffOptions interior;     // interior.spp = 0 skips the interior term (its images are zero)
     int primary_spp = 4;      // primary boundary samples per pixel (per batch); 0 disables the term
     int direct_spp = 4;       // direct boundary samples per pixel (per batch); 0 disables the term
     int indirect_spp = 4;     // indirect boundary samples per pixel and technique (per batch); 0 disables it
@@ -32,7 +34,13 @@ struct PsdrDerivative {
     Image pixel_stderr;
     Image total;               // interior + boundary
     Image total_stderr;        // combined standard error (the estimators are independent)
+    // What each term cost, in the order interior, primary, direct, indirect, pixel.
+    std::array<SampleCost, 5> cost;
+    std::array<double, 5> seconds{};
 };
+
+// The terms' names in that order.
+inline constexpr std::array<const char*, 5> PsdrTermNames = {"interior", "primary", "direct", "indirect", "pixel"};
 
 PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, const PsdrOptions& options);
 Gradient psdr_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const PsdrOptions& options);

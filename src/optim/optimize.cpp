@@ -1,6 +1,7 @@
 #include "optim/optimize.h"
 
 #include "core/error.h"
+#include "diff/budget.h"
 #include "core/plot.h"
 #include "optim/adam.h"
 #include "render/render.h"
@@ -177,9 +178,11 @@ OptimizeConfig parse_optimize_config(const json& j, const std::string& base_dir,
         if (root.has(key) && c.method == OptimizeConfig::Method::Interior)
             throw Error(source + ": key '" + key +
                         "' is a boundary-term budget; method 'interior' has no boundary terms");
-    c.primary_spp = int(root.integer("primary_spp", c.primary_spp, 0));
-    c.direct_spp = int(root.integer("direct_spp", c.direct_spp, 0));
-    c.indirect_spp = int(root.integer("indirect_spp", c.indirect_spp, 0));
+    if (root.has("primary_spp") || root.has("direct_spp") || root.has("indirect_spp")) {
+        c.primary_spp = int(root.integer("primary_spp", 4, 0));
+        c.direct_spp = int(root.integer("direct_spp", 4, 0));
+        c.indirect_spp = int(root.integer("indirect_spp", 4, 0));
+    }
     c.loss = parse_loss_kind(root.string("loss", "l2"));
     c.iterations = int(root.integer("iterations", c.iterations, 0));
     c.spp = int(root.integer("spp", c.spp, 1));
@@ -290,6 +293,7 @@ json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(); }
 void write_result_json(const fs::path& path, const OptimizeResult& result) {
     json j;
     j["method"] = result.psdr ? "psdr" : "interior";
+    if (!result.budget.empty()) j["budget"] = result.budget;
     j["final_parameter_error"] = finite_or_null(result.final_parameter_error);
     j["final_translation_error"] = finite_or_null(result.final_translation_error);
     j["final_rotation_error_degrees"] = finite_or_null(result.final_rotation_error);
@@ -387,9 +391,12 @@ OptimizeResult optimize(const OptimizeConfig& config,
     diff.interior.spp = config.gradient_spp;
     diff.interior.threads = config.threads;
     diff.interior.path = path_settings(*scene);
-    diff.primary_spp = config.primary_spp;
-    diff.direct_spp = config.direct_spp;
-    diff.indirect_spp = config.indirect_spp;
+    const bool calibrate = result.psdr && config.primary_spp < 0;
+    if (!calibrate) {
+        diff.primary_spp = std::max(0, config.primary_spp);
+        diff.direct_spp = std::max(0, config.direct_spp);
+        diff.indirect_spp = std::max(0, config.indirect_spp);
+    }
     CsvLog log(out / "log.csv", problem);
     const auto start = std::chrono::steady_clock::now();
     auto elapsed = [&] {
@@ -417,6 +424,10 @@ OptimizeResult optimize(const OptimizeConfig& config,
             write_image((out / snapshot_name(it)).string(), primal);
 
         diff.interior.seed = stream_seed(config.seed, 2 * uint64_t(it) + 2);
+        if (calibrate && it == 0) {
+            diff = problem.gradient_budget(loss.adjoint, diff, config.gradient_spp);
+            result.budget = describe_budget(diff);
+        }
         const std::vector<double> gradient = problem.gradient(loss.adjoint, diff, result.psdr);
         // Exponential schedule: the rates fall to lr_decay × lr at the last iteration.
         const double lr_scale =

@@ -17,17 +17,20 @@
 //   method          string     "auto" (default: psdr when a pose is optimized, else interior) | "interior" |
 //                              "psdr"; "interior" with a pose is an error (it has no silhouette or shadow
 //                              term)
-//   primary_spp     int        psdr: primary boundary samples per pixel (default 4; 0 disables the term)
-//   direct_spp      int        psdr: direct boundary samples per pixel (default 4; 0 disables the term)
-//   indirect_spp    int        psdr: indirect boundary samples per pixel and technique (default 4; 0 disables it)
+//   primary_spp     int        psdr: primary boundary samples per pixel (0 disables the term)
+//   direct_spp      int        psdr: direct boundary samples per pixel (0 disables the term)
+//   indirect_spp    int        psdr: indirect boundary samples per pixel and technique (0 disables it)
+//                              With none of the three, gradient_spp is the psdr total's budget, split over
+//                              the terms by a calibration pass at the first iteration (diff/budget.h); with
+//                              any of them, the others default to 4 and the interior gets gradient_spp.
 //   loss            string     "l2" (default) | "rel_l2"
 //   iterations      int        number of Adam steps
 //   spp             int        samples per pixel of the primal image of each iteration
-//   gradient_spp    int        samples per pixel of the gradient's interior term (independent of the
-//   primal's) seed            int        base seed (default 0) output          string     output directory
-//   (default "optimize_out"), relative to the working directory snapshot_every  int        write
-//   iter_NNNN.png every N iterations (0 = never; default 10) lr_decay        number     learning-rate factor
-//   reached at the last iteration, decayed exponentially
+//   gradient_spp    int        samples per pixel of the gradient (see primary_spp), independent of the primal's
+//   seed            int        base seed (default 0)
+//   output          string     output directory (default "optimize_out"), relative to the working directory
+//   snapshot_every  int        write iter_NNNN.png every N iterations (0 = never; default 10)
+//   lr_decay        number     learning-rate factor reached at the last iteration, decayed exponentially
 //                              (default 1: constant rates)
 //   threads         int        worker threads (0 = all; default 0)
 #pragma once
@@ -53,7 +56,7 @@ struct OptimizeConfig {
     std::map<std::string, std::vector<float>> target_values;
     int target_spp = 1024;
     enum class Method { Auto, Interior, Psdr } method = Method::Auto;
-    int primary_spp = 4, direct_spp = 4, indirect_spp = 4;
+    int primary_spp = -1, direct_spp = -1, indirect_spp = -1; // -1: calibrated from gradient_spp (see above)
     LossKind loss = LossKind::L2;
     int iterations = 100;
     int spp = 16, gradient_spp = 16;
@@ -95,7 +98,8 @@ struct OptimizeResult {
     double final_parameter_error = std::numeric_limits<double>::quiet_NaN();
     double final_translation_error = std::numeric_limits<double>::quiet_NaN();
     double final_rotation_error = std::numeric_limits<double>::quiet_NaN();
-    bool psdr = false; // the method used
+    bool psdr = false;  // the method used
+    std::string budget; // psdr's per-term budget when calibrated (diff/budget.h)
     double target_seconds = 0, seconds = 0;
 };
 

@@ -1,6 +1,7 @@
 #include "optim/problem.h"
 
 #include "core/error.h"
+#include "diff/budget.h"
 
 #include <cmath>
 #include <map>
@@ -167,6 +168,10 @@ void InverseProblem::apply() {
     if (!poses_.empty()) scene_.build();
     params_->enable(
         selection_); // after the meshes moved: the motions' centers are the current bounding boxes'
+}
+
+PsdrOptions InverseProblem::gradient_budget(const Image& adjoint, const PsdrOptions& base, int spp) const {
+    return psdr_gradient_budget(scene_, *params_, adjoint, base, spp);
 }
 
 std::vector<double> InverseProblem::gradient(const Image& adjoint, const PsdrOptions& options,

@@ -68,6 +68,8 @@ class InverseProblem {
     // dL/dx in the tangent layout for the adjoint ∂L/∂I at the current values. With `psdr` the boundary terms
     // are included (options.primary_spp / direct_spp); otherwise only options.interior is used.
     std::vector<double> gradient(const Image& adjoint, const PsdrOptions& options, bool psdr) const;
+    // The psdr total's per-term budgets for `spp` samples per pixel and this adjoint (diff/budget.h).
+    PsdrOptions gradient_budget(const Image& adjoint, const PsdrOptions& base, int spp) const;
 
     // Errors against true values (the values() layout): ‖x − x*‖ / ‖x*‖ over Data entries; ‖t − t*‖ (scene
     // units) and the angle of R R*ᵀ (degrees) of one pose entry. NaN when there is no such entry.
