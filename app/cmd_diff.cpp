@@ -33,7 +33,7 @@ struct Common {
     int spp = 64, threads = 0, batches = 0;
     uint64_t seed = 0;
     std::string output, stderr_output, terms_prefix;
-    bool quiet = false;
+    bool quiet = false, no_guiding = false;
     // --method paths (paper 002)
     std::string sampling = "differential";
     float q = 0.5f;
@@ -67,6 +67,7 @@ void add_method(CLI::App* cmd, Common& c) {
     cmd->add_option("--direct-spp", c.direct_spp, "samples per pixel of the direct boundary term (experts)")->check(CLI::NonNegativeNumber);
     cmd->add_option("--indirect-spp", c.indirect_spp, "samples per pixel of the indirect boundary term (experts)")->check(CLI::NonNegativeNumber);
     cmd->add_option("--pixel-spp", c.pixel_spp, "samples per pixel of the pixel-boundary term (experts)")->check(CLI::NonNegativeNumber);
+    cmd->add_flag("--no-guiding", c.no_guiding, "sample the primary term's edges by projected length only (no contrast pilot)");
     cmd->add_option("--first-vertex", c.first_vertex,
                     "parameterization of the vertex the camera sees: image (fixed camera rays; needs a static camera), "
                     "material (material points; the filter and pixel edges move) or auto (image unless the camera "
@@ -114,6 +115,7 @@ PsdrOptions psdr_base(const Scene& scene, const Common& c, int batches, bool ant
     o.interior.path = path_settings(scene);
     o.interior.first_vertex = parse_first_vertex(c.first_vertex);
     o.primary_spp = o.direct_spp = o.indirect_spp = o.pixel_spp = 0;
+    o.guiding = !c.no_guiding;
     return o;
 }
 
@@ -218,11 +220,19 @@ void cmd_derivative(const Common& c, bool no_antithetic) {
     write_signed(c.output, total ? d.total : d.interior.derivative);
     if (!c.stderr_output.empty()) write_image(c.stderr_output, total ? d.total_stderr : d.interior.stderr_img);
     if (!c.terms_prefix.empty()) {
-        write_signed(c.terms_prefix + "_interior" + lower_extension(c.output), d.interior.derivative);
-        if (total) write_signed(c.terms_prefix + "_primary" + lower_extension(c.output), d.primary);
-        if (total) write_signed(c.terms_prefix + "_direct" + lower_extension(c.output), d.direct);
-        if (total) write_signed(c.terms_prefix + "_indirect" + lower_extension(c.output), d.indirect);
-        if (total && needs_pixel_boundary(*scene, params, o.interior.first_vertex)) write_signed(c.terms_prefix + "_pixel" + lower_extension(c.output), d.pixel);
+        // Each term's image (and, with --stderr, its standard error as PREFIX_<term>_stderr.exr).
+        const std::array<std::pair<const Image*, const Image*>, 5> terms = {{{&d.interior.derivative, &d.interior.stderr_img},
+                                                                             {&d.primary, &d.primary_stderr},
+                                                                             {&d.direct, &d.direct_stderr},
+                                                                             {&d.indirect, &d.indirect_stderr},
+                                                                             {&d.pixel, &d.pixel_stderr}}};
+        for (size_t k = 0; k < terms.size(); ++k) {
+            if (k > 0 && !total) break;
+            if (k == 4 && !needs_pixel_boundary(*scene, params, o.interior.first_vertex)) continue;
+            const std::string name = c.terms_prefix + "_" + PsdrTermNames[k];
+            write_signed(name + lower_extension(c.output), *terms[k].first);
+            if (!c.stderr_output.empty() && !terms[k].second->pixels.empty()) write_image(name + "_stderr.exr", *terms[k].second);
+        }
     }
     if (total && !c.quiet) {
         std::fprintf(stderr, "%-9s %12s %10s %12s %9s\n", "term", "samples", "rays/smp", "tape/smp", "seconds");
@@ -381,7 +391,9 @@ void add_diff_commands(CLI::App& app) {
     d->add_option("--stderr", deriv->stderr_output, "per-pixel standard-error image (.exr)");
     d->add_option("--batches", deriv->batches, "independent batches for --stderr (default 8)")->check(CLI::PositiveNumber);
     d->add_flag("--no-antithetic", *no_antithetic, "disable pixel-level antithetic sampling");
-    d->add_option("--terms", deriv->terms_prefix, "also write each term's image as PREFIX_interior / _primary / _direct / _indirect (/ _pixel with a box filter)");
+    d->add_option("--terms", deriv->terms_prefix,
+                  "also write each term's image as PREFIX_interior / _primary / _direct / _indirect (/ _pixel with a box "
+                  "filter and a moving camera), and with --stderr their standard errors as PREFIX_<term>_stderr.exr");
     d->add_option("--adjoint", deriv->adjoint, "--method paths --adaptive: adjoint image ∂L/∂I giving the pixel importance");
     add_method(d, *deriv);
     d->callback([deriv, no_antithetic] { cmd_derivative(*deriv, *no_antithetic); });

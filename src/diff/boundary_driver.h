@@ -28,6 +28,7 @@ struct BoundaryOptions {
     int threads = 0;
     PathSettings path;
     FirstVertex first_vertex = FirstVertex::Auto; // must match the interior term's (diff/first_vertex.h)
+    bool guiding = true;                          // terms that can guide their sampling by a pilot do
     SampleCost* cost = nullptr;                   // if set, the samples' cost is added to it
 };
 

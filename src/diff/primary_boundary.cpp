@@ -5,6 +5,10 @@
 #include "scene/texture.h"
 
 #include <algorithm>
+#include <tuple>
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 namespace penumbra {
 
@@ -22,8 +26,8 @@ struct PrimaryBoundary::Silhouettes {
         float z0, z1;     // their depths along the view direction (perspective-correct interpolation)
     };
     std::vector<SilhouetteEdge> edges;
-    DiscreteDistribution by_length;
-    float total_length = 0.f;
+    std::vector<float> lengths;        // of the edges' images
+    DiscreteDistribution distribution; // over edges; points are uniform along an edge's image
     bool image_space = false;
 };
 
@@ -87,8 +91,8 @@ bool shading_jumps(const Shape& shape, const Edge& e, bool textured) {
     return false;
 }
 
-std::unique_ptr<const Silhouettes> find_silhouettes(const Scene& scene, const SceneEdges& edges, const Parameters& params,
-                                                    bool image_space) {
+std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdges& edges, const Parameters& params,
+                                              bool image_space) {
     const Sensor& sensor = *scene.sensor;
     const Film& film = *sensor.film;
     const bool parallel = parallel_projection(sensor);
@@ -100,7 +104,6 @@ std::unique_ptr<const Silhouettes> find_silhouettes(const Scene& scene, const Sc
     auto result = std::make_unique<Silhouettes>();
     Silhouettes& out = *result;
     out.image_space = image_space;
-    std::vector<float> lengths;
     const Shape* textured_shape = nullptr; // the shape `textured` was last found for (edges come shape by shape)
     bool textured = false;
     for (const SceneEdges::SceneEdge& se : edges.edges) {
@@ -145,10 +148,9 @@ std::unique_ptr<const Silhouettes> find_silhouettes(const Scene& scene, const Sc
         const float length = std::sqrt(sqr(kept.s1.x - kept.s0.x) + sqr(kept.s1.y - kept.s0.y));
         if (!(length > 0.f) || !std::isfinite(length)) continue;
         out.edges.push_back(kept);
-        lengths.push_back(length);
-        out.total_length += length;
+        out.lengths.push_back(length);
     }
-    if (!lengths.empty()) out.by_length = DiscreteDistribution(lengths);
+    if (!out.lengths.empty()) out.distribution = DiscreteDistribution(out.lengths);
     return result;
 }
 
@@ -165,28 +167,29 @@ Side classify(const SurfaceInteraction3f& hit, const Shape& shape, float edge_di
     return Side::Front;
 }
 
-// One boundary sample: a point s on an edge's image, the radiance on either side, and the normal velocity of the
-// discontinuity as a tape expression (its value is ~0, its derivative the velocity).
-//   image-space first vertex: (L_a − L_b) ((s_edge(θ) − s) · n), n pointing from side a to side b (for a
-//     silhouette a is the occluder; for a crease either face);
-//   material form: −L_bg ((s_edge(θ) − s_bg(θ)) · n) for silhouettes, the occluder's own side being the
-//     interior term's (its material domain is not cut).
-BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const MaterialForm& form,
-                               const BoundarySampleIndex& index, Sampler& sampler, const PathSettings& settings,
-                               RayCounter& rays) {
-    BoundarySample out;
+// Where an edge's image crosses the film at fraction t: the film point s, the image-space normal n from side 1
+// (the edge's own surface) to side 2 (the background of a silhouette, the other face of a crease), and the
+// two sides' primary rays and hits.
+struct EdgeCrossing {
+    bool valid = false;
+    Vec2f s, n;
+    float tau = 0.f; // the edge parameter (v0 → v1) of the 3D point seen at s
+    Ray ray[2];
+    SurfaceInteraction3f hit[2];
+    Color3f weight[2];
+};
+
+EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& se, float t, Sampler& sampler,
+                        RayCounter& rays) {
+    EdgeCrossing out;
     const Sensor& sensor = *scene.sensor;
-    float u = index.stratified(sampler);
-    const Silhouettes::SilhouetteEdge& se = sil.edges[sil.by_length.sample(u)];
-    const float t = u;
-    const Vec2f s = se.s0 + (se.s1 - se.s0) * t;
+    out.s = se.s0 + (se.s1 - se.s0) * t;
     // The 3D edge point projecting to s (perspective-correct along the edge; affine for a parallel projection).
-    const float tau = se.tau0 + (se.tau1 - se.tau0) * perspective_correct(t, se.z0, se.z1, parallel_projection(sensor));
+    out.tau = se.tau0 + (se.tau1 - se.tau0) * perspective_correct(t, se.z0, se.z1, parallel_projection(sensor));
     const Vec2f dir = se.s1 - se.s0;
     const Vec2f n2 = Vec2f(-dir.y, dir.x) / std::sqrt(dir.x * dir.x + dir.y * dir.y);
-
     const Vec3f p0 = se.shape->mesh.positions[se.edge.v0], p1 = se.shape->mesh.positions[se.edge.v1];
-    const Vec3f x_edge = p0 + (p1 - p0) * tau;
+    const Vec3f x_edge = p0 + (p1 - p0) * out.tau;
 
     // The two sides, probed at s ± eps n2. The radiances are the limits at the edge, but rays leaving a probed
     // point start RayEpsilon-scaled offsets off its surface: a shadow ray toward a light at (or near) the camera
@@ -197,49 +200,123 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
     // fraction of a pixel.
     const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
     const float clearance = 2.f * RayEpsilon * (1.f + max_component(abs(eye)) + norm(x_edge - eye));
-    const Ray center = sensor.sample_ray(s, Vec2f(0.5f)).first, side = sensor.sample_ray(s + n2, Vec2f(0.5f)).first;
+    const Ray center = sensor.sample_ray(out.s, Vec2f(0.5f)).first, side = sensor.sample_ray(out.s + n2, Vec2f(0.5f)).first;
     const float depth = norm(x_edge - center.o);
     const float world_per_pixel = norm(side.o + side.d * depth - (center.o + center.d * depth));
-    const float eps = std::clamp(clearance / world_per_pixel, 1e-3f, 0.25f); // pixels
-    const auto [ray_a, wa] = sensor.sample_ray(s + n2 * eps, sampler.next_2d());
-    const auto [ray_b, wb] = sensor.sample_ray(s - n2 * eps, sampler.next_2d());
-    rays.rays += 2;
-    const SurfaceInteraction3f hit_a = scene.intersect(ray_a), hit_b = scene.intersect(ray_b);
-    const Side side_a = classify(hit_a, *se.shape, norm(x_edge - ray_a.o)), side_b = classify(hit_b, *se.shape, norm(x_edge - ray_b.o));
-    // Order the sides so that the first is the edge's own (near) one; n points from it to the other.
-    const bool a_first = side_a == Side::Near;
-    const Side first = a_first ? side_a : side_b, second = a_first ? side_b : side_a;
-    const Vec2f n = a_first ? n2 * -1.f : n2;
-    const Ray &ray_1 = a_first ? ray_a : ray_b, &ray_2 = a_first ? ray_b : ray_a;
-    const SurfaceInteraction3f &hit_1 = a_first ? hit_a : hit_b, &hit_2 = a_first ? hit_b : hit_a;
-    const Color3f w_1 = a_first ? wa : wb, w_2 = a_first ? wb : wa;
-    if (first != Side::Near) return out;
-    if (se.crease ? !(second == Side::Near && hit_1.prim_index != hit_2.prim_index) : second != Side::Far) return out;
-
-    // Velocity of the edge point (a fixed point on the moving edge, Eq. 47 of paper 001) in image space.
-    const Vec3<Var> x_e = form.position(*se.shape, se.edge.v0) +
-                          (form.position(*se.shape, se.edge.v1) - form.position(*se.shape, se.edge.v0)) * Var(tau);
-    const Vec3<Var> view(Vec3f(0.f, 0.f, 1.f));
-    Vec2<Var> s_e;
-    Var j;
-    if (!sensor.film_position(form.to_reference_camera(x_e, eye), view, s_e, j)) return out;
-    const float inv_pdf = sil.total_length;
-
-    // Radiance on the second side, a path-traced estimate (the background of a silhouette).
-    const Color3f L_2 = trace_path<float>(scene, sampler, ray_2, hit_2, hit_2, ReferenceGeometry{}, settings, rays) * w_2;
-    if (sil.image_space) {
-        const Color3f L_1 = trace_path<float>(scene, sampler, ray_1, hit_1, hit_1, ReferenceGeometry{}, settings, rays) * w_1;
-        out.add_splat(s, (L_1 - L_2) * inv_pdf, (s_e.x - Var(s.x)) * Var(n.x) + (s_e.y - Var(s.y)) * Var(n.y));
-        return out;
+    const float eps = std::clamp(clearance / world_per_pixel, 1e-3f, 0.05f); // pixels
+    Side sides[2];
+    for (int k = 0; k < 2; ++k) {
+        std::tie(out.ray[k], out.weight[k]) = sensor.sample_ray(out.s + n2 * (k == 0 ? eps : -eps), sampler.next_2d());
+        out.hit[k] = scene.intersect(out.ray[k]);
+        sides[k] = classify(out.hit[k], *se.shape, norm(x_edge - out.ray[k].o));
     }
-    // Material form: the background's material point moves too (Eq. 50).
-    Vec2<Var> s_b(Var(s.x), Var(s.y));
-    if (hit_2.is_valid() && !sensor.film_position(form.to_reference_camera(form.vertex(hit_2).p, eye), view, s_b, j)) return out;
-    out.add_splat(s, L_2 * -inv_pdf, (s_e.x - s_b.x) * Var(n.x) + (s_e.y - s_b.y) * Var(n.y));
+    rays.rays += 2;
+    // Order the sides so that the first is the edge's own (near) one; n points from it to the other.
+    out.n = n2 * -1.f;
+    if (sides[0] != Side::Near) {
+        std::swap(out.ray[0], out.ray[1]);
+        std::swap(out.hit[0], out.hit[1]);
+        std::swap(out.weight[0], out.weight[1]);
+        std::swap(sides[0], sides[1]);
+        out.n = n2;
+    }
+    if (sides[0] != Side::Near) return out;
+    out.valid = se.crease ? sides[1] == Side::Near && out.hit[0].prim_index != out.hit[1].prim_index : sides[1] == Side::Far;
     return out;
 }
 
-constexpr uint64_t Salt = 0xB5AD4ECEDA1CE2A9ULL;
+// The jump of the pixel integrand across the edge: L_1 − L_2 with the image-space first vertex; −L_2 in material
+// form, where the edge's own side is the interior term's (its material domain is not cut). Path-traced
+// estimates of the radiance seen on either side.
+Color3f jump(const Scene& scene, const EdgeCrossing& c, bool image_space, const PathSettings& settings,
+             Sampler& sampler, RayCounter& rays) {
+    const Color3f L_2 = trace_path<float>(scene, sampler, c.ray[1], c.hit[1], c.hit[1], ReferenceGeometry{}, settings, rays) * c.weight[1];
+    if (!image_space) return L_2 * -1.f;
+    return trace_path<float>(scene, sampler, c.ray[0], c.hit[0], c.hit[0], ReferenceGeometry{}, settings, rays) * c.weight[0] - L_2;
+}
+
+// One boundary sample: a point s on an edge's image, the jump there, and the normal velocity of the
+// discontinuity as a tape expression (its value is ~0, its derivative the velocity):
+//   image-space first vertex: (L_1 − L_2) ((s_edge(θ) − s) · n);
+//   material form: −L_2 ((s_edge(θ) − s_bg(θ)) · n) for silhouettes, s_bg the background's material point.
+BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const MaterialForm& form,
+                               const BoundarySampleIndex& index, Sampler& sampler, const PathSettings& settings,
+                               RayCounter& rays) {
+    BoundarySample out;
+    const Sensor& sensor = *scene.sensor;
+    float t = index.stratified(sampler);
+    const size_t e = sil.distribution.sample(t);
+    const Silhouettes::SilhouetteEdge& se = sil.edges[e];
+    const EdgeCrossing c = cross_edge(scene, se, t, sampler, rays);
+    if (!c.valid) return out;
+
+    // Velocity of the edge point (a fixed point on the moving edge, Eq. 47 of paper 001) in image space.
+    const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
+    const Vec3<Var> x_e = form.position(*se.shape, se.edge.v0) +
+                          (form.position(*se.shape, se.edge.v1) - form.position(*se.shape, se.edge.v0)) * Var(c.tau);
+    const Vec3<Var> view(Vec3f(0.f, 0.f, 1.f));
+    Vec2<Var> s_e, s_b(Var(c.s.x), Var(c.s.y));
+    Var j;
+    if (!sensor.film_position(form.to_reference_camera(x_e, eye), view, s_e, j)) return out;
+    // Material form: the background's material point moves too (Eq. 50).
+    if (!sil.image_space && c.hit[1].is_valid() &&
+        !sensor.film_position(form.to_reference_camera(form.vertex(c.hit[1]).p, eye), view, s_b, j))
+        return out;
+    // Density per unit length of the film-space edge: the edge's probability over its projected length.
+    const float inv_pdf = sil.lengths[e] / sil.distribution.pmf(e);
+    out.add_splat(c.s, jump(scene, c, sil.image_space, settings, sampler, rays) * inv_pdf,
+                  (s_e.x - s_b.x) * Var(c.n.x) + (s_e.y - s_b.y) * Var(c.n.y));
+    return out;
+}
+
+constexpr uint64_t Salt = 0xB5AD4ECEDA1CE2A9ULL, GuideSalt = 0x2127599BF4325C37ULL;
+
+// Contrast guiding: edges are drawn with probability ∝ ℓ_e (½ + ½ c_e / c̄), a mixture of the projected length
+// ℓ_e and of ℓ_e c_e, where c_e is the RMS jump on the edge (the sum of the channels) measured by a pilot of a
+// few stratified crossings per edge and c̄ its length-weighted mean: an edge's share follows √E[jump²], the
+// density that minimizes the variance of a sum of jumps, while the uniform half keeps every edge's density
+// bounded below where the pilot saw nothing. The pilot (1/16 of the term's samples, at most 8 crossings per
+// edge, none when the edges outnumber it) only shapes the density: its samples are not in the estimate.
+void guide(const Scene& scene, Silhouettes& sil, const PathSettings& settings, const BoundaryOptions& options) {
+    const Film& film = *scene.sensor->film;
+    const uint64_t budget = uint64_t(film.width) * film.height * uint64_t(options.samples_per_pixel) / 16;
+    const size_t n = sil.edges.size();
+    if (!options.guiding || n < 2 || budget < n) return;
+    const int per_edge = int(std::min<uint64_t>(8, budget / n));
+    std::vector<float> rms(n, 0.f);
+    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency());
+    arena.execute([&] {
+        tbb::parallel_for(size_t(0), n, [&](size_t e) {
+            Sampler sampler;
+            RayCounter rays;
+            double sum2 = 0;
+            for (int k = 0; k < per_edge; ++k) {
+                sampler.start(options.seed ^ GuideSalt, e, uint64_t(k));
+                const float t = (float(k) + sampler.next_1d()) / float(per_edge);
+                const EdgeCrossing c = cross_edge(scene, sil.edges[e], t, sampler, rays);
+                if (!c.valid) continue;
+                const Color3f j = jump(scene, c, sil.image_space, settings, sampler, rays);
+                sum2 += sqr(double(j.x) + j.y + j.z);
+            }
+            rms[e] = float(std::sqrt(sum2 / per_edge));
+        });
+    });
+    double length = 0, weighted = 0;
+    for (size_t e = 0; e < n; ++e) length += sil.lengths[e], weighted += double(sil.lengths[e]) * rms[e];
+    if (!(weighted > 0) || !std::isfinite(weighted)) return;
+    const double mean = weighted / length;
+    std::vector<float> weights(n);
+    for (size_t e = 0; e < n; ++e) weights[e] = float(sil.lengths[e] * (0.5 + 0.5 * rms[e] / mean));
+    sil.distribution = DiscreteDistribution(weights);
+}
+
+// The edges seen by the camera, with their sampling density.
+std::unique_ptr<const Silhouettes> prepare(const Scene& scene, const SceneEdges& edges, const Parameters& params,
+                                           const MaterialForm& form, const BoundaryOptions& options) {
+    auto sil = find_silhouettes(scene, edges, params, form.image_space_first_vertex());
+    if (!sil->edges.empty()) guide(scene, *sil, options.path, options);
+    return sil;
+}
 
 } // namespace
 
@@ -248,7 +325,7 @@ PrimaryBoundary::~PrimaryBoundary() = default;
 
 Image PrimaryBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
     const MaterialForm form(scene_, params, options.first_vertex);
-    const auto silhouettes = find_silhouettes(scene_, edges_, params, form.image_space_first_vertex());
+    const auto silhouettes = prepare(scene_, edges_, params, form, options);
     if (silhouettes->edges.empty()) return Image(scene_.sensor->film->width, scene_.sensor->film->height);
     return boundary_derivative(scene_, params, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
         return sample_boundary(scene_, *silhouettes, form, index, sampler, options.path, rays);
@@ -258,7 +335,7 @@ Image PrimaryBoundary::derivative(const Parameters& params, const BoundaryOption
 void PrimaryBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
                                std::vector<double>& gradient) const {
     const MaterialForm form(scene_, params, options.first_vertex);
-    const auto silhouettes = find_silhouettes(scene_, edges_, params, form.image_space_first_vertex());
+    const auto silhouettes = prepare(scene_, edges_, params, form, options);
     if (silhouettes->edges.empty()) return;
     boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
         return sample_boundary(scene_, *silhouettes, form, index, sampler, options.path, rays);

@@ -27,6 +27,7 @@ void boundary_batches(const Scene& scene, const Parameters& params, const PsdrOp
         bo.threads = options.interior.threads;
         bo.path = options.interior.path;
         bo.first_vertex = options.interior.first_vertex;
+        bo.guiding = options.guiding;
         bo.cost = &cost;
         batches.add(term.derivative(params, bo));
     }
@@ -117,6 +118,7 @@ Gradient psdr_gradient(const Scene& scene, const Parameters& params, const Image
     bo.threads = options.interior.threads;
     bo.path = options.interior.path;
     bo.first_vertex = options.interior.first_vertex;
+    bo.guiding = options.guiding;
     bo.cost = &g.cost;
     const BoundaryTerms boundary(scene, options);
     for (const BoundaryTerms::Term& t : boundary.terms()) {

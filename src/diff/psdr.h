@@ -20,6 +20,7 @@ struct PsdrOptions {
     int direct_spp = 4;       // direct boundary samples per pixel (per batch); 0 disables the term
     int indirect_spp = 4;     // indirect boundary samples per pixel and technique (per batch); 0 disables it
     int pixel_spp = 4;        // pixel-boundary samples per pixel (per batch; box filters only); 0 disables it
+    bool guiding = true;      // contrast-guided sampling of the primary term's edges (always mixed with uniform)
 };
 
 struct PsdrDerivative {
