@@ -1,7 +1,9 @@
 // On a 200k-triangle scene, in one run:
 //  - primal throughput of `path` and raw Embree incoherent-ray throughput on the same geometry (their ratio);
 //  - the reverse-mode gradient pass (interior term, every data parameter enabled: 300k+ scalars, most of them
-//    vertex positions) against the primal pass at the same samples per pixel (their time ratio per sample).
+//    vertex positions) against the primal pass at the same samples per pixel (their time ratio per sample);
+//  - the cost model of the sample budgets (diff/sample_cost.h): seconds per counted cost unit of each pass,
+//    relative to the forward-mode interior's (1 everywhere if the model were exact).
 #include "core/distribution.h"
 #include "core/rng.h"
 #include "core/warp.h"
@@ -90,7 +92,7 @@ Scene& scene() {
 double g_path_rays_per_s = 0, g_raw_rays_per_s = 0; // raw: volume workload
 double g_primal_seconds_per_sample = 0, g_gradient_seconds_per_sample = 0;
 size_t g_gradient_dimension = 0;
-double g_derivative_seconds_per_sample = 0;
+double g_derivative_seconds_per_sample = 0, g_derivative_seconds_per_unit = 0, g_gradient_seconds_per_unit = 0;
 
 void BM_PathPrimal(benchmark::State& state) {
     RenderOptions opt;
@@ -215,14 +217,16 @@ void BM_Gradient(benchmark::State& state) {
     DiffOptions o;
     o.spp = 4;
     o.path = path_settings(scene());
-    double seconds = 0, samples = 0;
+    double seconds = 0, samples = 0, units = 0;
     for (auto _ : state) {
         const Gradient g = render_gradient(scene(), params, adjoint, o);
         benchmark::DoNotOptimize(g.values.data());
         seconds += g.seconds;
         samples += double(film.width) * film.height * o.spp;
+        units += g.cost.units();
     }
     g_gradient_seconds_per_sample = seconds / samples;
+    g_gradient_seconds_per_unit = seconds / units;
     g_gradient_dimension = size_t(params.dimension());
     state.counters["parameters"] = double(params.dimension());
     state.counters["samples/s"] = samples / seconds;
@@ -237,20 +241,22 @@ void BM_Derivative(benchmark::State& state) {
     DiffOptions o;
     o.spp = 4;
     o.path = path_settings(scene());
-    double seconds = 0, samples = 0;
+    double seconds = 0, samples = 0, units = 0;
     for (auto _ : state) {
         const DerivativeImage d = render_derivative(scene(), params, o);
         benchmark::DoNotOptimize(d.derivative.pixels.data());
         seconds += d.seconds;
         samples += double(film.width) * film.height * o.spp;
+        units += d.cost.units();
     }
     g_derivative_seconds_per_sample = seconds / samples;
+    g_derivative_seconds_per_unit = seconds / units;
     state.counters["samples/s"] = samples / seconds;
 }
 
 // The boundary terms along the same translation, one sample per pixel each (edge sets prepared once, outside
 // the timed loop): time per boundary sample relative to a primal sample.
-double g_boundary_seconds_per_sample[3] = {0, 0, 0};
+double g_boundary_seconds_per_sample[3] = {0, 0, 0}, g_boundary_seconds_per_unit[3] = {0, 0, 0};
 const char* const BoundaryTermNames[3] = {"primary", "direct", "indirect"};
 
 void BM_Boundary(benchmark::State& state) {
@@ -267,6 +273,8 @@ void BM_Boundary(benchmark::State& state) {
     const IndirectBoundary indirect(scene(), edges);
     const BoundaryTerm* const terms[3] = {&primary, &direct, &indirect};
     double seconds = 0, samples = 0;
+    SampleCost cost;
+    o.cost = &cost;
     for (auto _ : state) {
         const auto start = std::chrono::steady_clock::now();
         const Image d = terms[term]->derivative(params, o);
@@ -275,6 +283,7 @@ void BM_Boundary(benchmark::State& state) {
         samples += double(film.width) * film.height * o.samples_per_pixel;
     }
     g_boundary_seconds_per_sample[term] = seconds / samples;
+    g_boundary_seconds_per_unit[term] = seconds / cost.units();
     state.SetLabel(BoundaryTermNames[term]);
     state.counters["samples/s"] = samples / seconds;
 }
@@ -310,6 +319,15 @@ int main(int argc, char** argv) {
         if (g_primal_seconds_per_sample > 0 && g_boundary_seconds_per_sample[term] > 0)
             std::printf("%s boundary sample / primal sample, time = %.2f\n", BoundaryTermNames[term],
                         g_boundary_seconds_per_sample[term] / g_primal_seconds_per_sample);
+    if (g_derivative_seconds_per_unit > 0) {
+        std::printf("cost model (seconds per counted unit / the forward interior's):");
+        for (int term = 0; term < 3; ++term)
+            if (g_boundary_seconds_per_unit[term] > 0)
+                std::printf(" %s %.2f,", BoundaryTermNames[term], g_boundary_seconds_per_unit[term] / g_derivative_seconds_per_unit);
+        if (g_gradient_seconds_per_unit > 0)
+            std::printf(" reverse interior %.2f", g_gradient_seconds_per_unit / g_derivative_seconds_per_unit);
+        std::printf("\n");
+    }
     benchmark::Shutdown();
     return 0;
 }
