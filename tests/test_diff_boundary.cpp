@@ -16,6 +16,32 @@ namespace {
 
 const std::string validation = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/validation/";
 
+// 16 batches (for standard errors) with the given per-batch budgets: interior, primary, direct, indirect and pixel.
+PsdrOptions batched(const Scene& scene, uint64_t seed, int interior, int primary, int direct, int indirect, int pixel = 0) {
+    PsdrOptions o;
+    o.interior.spp = interior;
+    o.interior.batches = 16;
+    o.interior.seed = seed;
+    o.interior.path = path_settings(scene);
+    o.primary_spp = primary;
+    o.direct_spp = direct;
+    o.indirect_spp = indirect;
+    o.pixel_spp = pixel;
+    return o;
+}
+
+// The psdr total against central differences (16 batches of `fd_spp` samples per pixel, step h); prints it.
+DiffCheck check_total(Scene& scene, Parameters& params, const PsdrDerivative& d, double h, int fd_spp, uint64_t seed,
+                      const char* label) {
+    RenderOptions ro;
+    ro.spp = fd_spp;
+    ro.seed = seed;
+    const FiniteDifference fd = finite_difference(scene, params, h, ro, 16);
+    const DiffCheck c = check_against(d.total, d.total_stderr, fd.derivative, fd.stderr_img);
+    std::printf("  %s: %s\n", label, describe(c).c_str());
+    return c;
+}
+
 struct BoundaryRun {
     PsdrDerivative d;
     FiniteDifference fd;
@@ -30,15 +56,8 @@ BoundaryRun run(const std::string& scene_file, const std::string& param, double 
     auto scene = load_scene(validation + scene_file, defines);
     Parameters params(*scene);
     params.enable({parse_param_selection(param)});
-    PsdrOptions o;
-    o.interior.spp = 16;
-    o.interior.batches = 16;
-    o.interior.seed = 11;
-    o.interior.path = path_settings(*scene);
-    o.primary_spp = primary ? boundary_spp : 0;
-    o.direct_spp = direct ? boundary_spp : 0;
-    o.indirect_spp = indirect ? boundary_spp : 0;
-    o.pixel_spp = boundary_spp; // box filters only
+    const PsdrOptions o = batched(*scene, 11, 16, primary ? boundary_spp : 0, direct ? boundary_spp : 0,
+                                  indirect ? boundary_spp : 0, boundary_spp /* box filters and a moving camera only */);
     BoundaryRun r{psdr_derivative(*scene, params, o), {}, {}};
     RenderOptions ro;
     ro.spp = fd_spp;
@@ -89,15 +108,7 @@ void expect_hard_shadow_matches(const std::string& light) {
     auto scene = load_scene(validation + "shadow.xml", {{"res", "32"}, {"light", light}});
     Parameters params(*scene);
     params.enable({parse_param_selection("occluder.translate=1,0,0")});
-    PsdrOptions o;
-    o.interior.spp = 16;
-    o.interior.batches = 16;
-    o.interior.seed = 11;
-    o.interior.path = path_settings(*scene);
-    o.primary_spp = 0;
-    o.direct_spp = 1024;
-    o.indirect_spp = 0;
-    const PsdrDerivative d = psdr_derivative(*scene, params, o);
+    const PsdrDerivative d = psdr_derivative(*scene, params, batched(*scene, 11, 16, 0, 1024, 0));
     RenderOptions ro;
     ro.spp = 1024;
     ro.seed = 99;
@@ -242,22 +253,11 @@ TEST(PrimaryBoundary, ContrastGuidingIsUnbiasedAndLowersTheVariance) {
     auto scene = load_scene_string(xml);
     Parameters params(*scene);
     params.enable({parse_param_selection("ball.translate=1,0.3,0")});
-    PsdrOptions o;
-    o.interior.spp = 8;
-    o.interior.batches = 16;
-    o.interior.seed = 5;
-    o.interior.path = path_settings(*scene);
-    o.primary_spp = 16;
-    o.direct_spp = o.indirect_spp = 0;
+    PsdrOptions o = batched(*scene, 5, 8, 16, 0, 0);
     const PsdrDerivative guided = psdr_derivative(*scene, params, o);
     o.guiding = false;
     const PsdrDerivative by_length = psdr_derivative(*scene, params, o);
-    RenderOptions ro;
-    ro.spp = 256;
-    ro.seed = 9;
-    const FiniteDifference fd = finite_difference(*scene, params, 2e-3, ro, 16);
-    const DiffCheck c = check_against(guided.total, guided.total_stderr, fd.derivative, fd.stderr_img);
-    std::printf("  guided primary: %s\n", describe(c).c_str());
+    const DiffCheck c = check_total(*scene, params, guided, 2e-3, 256, 9, "guided primary");
     EXPECT_TRUE(c.passes()) << describe(c);
     auto variance = [](const Image& se) {
         double v = 0;
@@ -284,20 +284,8 @@ void expect_tessellated_occluder_shadow_matches(const std::string& light) {
     auto scene = load_scene_string(xml);
     Parameters params(*scene);
     params.enable({parse_param_selection("occluder.translate=1,0,0")});
-    PsdrOptions o;
-    o.interior.spp = 4;
-    o.interior.batches = 16;
-    o.interior.seed = 21;
-    o.interior.path = path_settings(*scene);
-    o.primary_spp = o.indirect_spp = 0;
-    o.direct_spp = 256;
-    const PsdrDerivative d = psdr_derivative(*scene, params, o);
-    RenderOptions ro;
-    ro.spp = 1024;
-    ro.seed = 23;
-    const FiniteDifference fd = finite_difference(*scene, params, 3e-3, ro, 16);
-    const DiffCheck c = check_against(d.total, d.total_stderr, fd.derivative, fd.stderr_img);
-    std::printf("  tessellated occluder: %s\n", describe(c).c_str());
+    const PsdrDerivative d = psdr_derivative(*scene, params, batched(*scene, 21, 4, 0, 256, 0));
+    const DiffCheck c = check_total(*scene, params, d, 3e-3, 1024, 23, "tessellated occluder");
     EXPECT_TRUE(c.passes()) << describe(c);
     EXPECT_GT(std::abs(c.comparison.mean_ref), 4.0 * std::abs(c.comparison.mean_ref - c.comparison.mean_test))
         << "the image sums must agree to 25%: " << describe(c);

@@ -69,6 +69,8 @@ public:
     // Motions driving a shape / the camera (empty when none is enabled).
     const std::vector<Motion>& motions(const Shape* shape) const;
     const std::vector<Motion>& sensor_motions() const { return sensor_motions_; }
+    // Whether the enabled parameters move the shape (a motion, or its vertex positions).
+    bool moves(const Shape& shape) const { return !motions(&shape).empty() || shape.vertex_param_index >= 0; }
 
     // Values of the enabled parameters (motions read 0: they are displacements from the reference).
     std::vector<float> values() const;

@@ -60,19 +60,6 @@ bool clip_to_box(const Vec2f& a, const Vec2f& b, const Vec2f& lo, const Vec2f& h
     return t0 < t1;
 }
 
-// Whether the shape's appearance varies with uv (a texture that is not constant), so that a uv seam is a
-// discontinuity.
-class TextureFinder final : public ParamVisitor {
-public:
-    void put(const std::string&, float*, int, int*, bool) override {}
-    void put_object(const std::string&, Object* object) override {
-        if (!object || found) return;
-        if (const auto* texture = dynamic_cast<const Texture*>(object); texture && !texture->is_constant()) found = true;
-        object->traverse(*this);
-    }
-    bool found = false;
-};
-
 // Whether the shading jumps across an edge between two faces: face normals, or vertex normals (or, on a
 // textured shape, uvs) that differ between the faces' copies of the edge's vertices (a hard edge or a seam).
 bool shading_jumps(const Shape& shape, const Edge& e, bool textured) {
@@ -108,18 +95,16 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
     bool textured = false;
     for (const SceneEdges::SceneEdge& se : edges.edges) {
         // In image space an edge of a shape that does not move is a discontinuity that does not move.
-        if (image_space && params.motions(se.shape).empty() && se.shape->vertex_param_index < 0) continue;
+        if (image_space && !params.moves(*se.shape)) continue;
         const TriangleMesh& m = se.shape->mesh;
         const Edge& e = se.edge;
         const bool silhouette = parallel ? is_silhouette_parallel(m, e, forward) : is_silhouette(m, e, eye);
         bool crease = false;
         if (!silhouette) {
             if (!image_space) continue;
-            if (se.shape != textured_shape) {
-                TextureFinder finder;
-                const_cast<Shape*>(se.shape)->traverse(finder);
+            if (se.shape != textured_shape) { // a uv seam is a discontinuity where a texture varies
                 textured_shape = se.shape;
-                textured = finder.found;
+                textured = has_texture(*const_cast<Shape*>(se.shape), [](const Texture& t) { return !t.is_constant(); });
             }
             if (!shading_jumps(*se.shape, e, textured)) continue;
             // On a solid, creases between faces turned away from the camera are hidden by the solid itself.

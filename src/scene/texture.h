@@ -4,6 +4,7 @@
 #include "scene/interaction.h"
 #include "scene/object.h"
 
+#include <functional>
 #include <memory>
 
 namespace penumbra {
@@ -38,6 +39,9 @@ public:
     PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_TEXTURE_IMPL)
 #undef PENUMBRA_TEXTURE_IMPL
 };
+
+// Whether a texture nested in `object` (its BSDF's, its emitter's, theirs...) satisfies `match`.
+bool has_texture(Object& object, const std::function<bool(const Texture&)>& match);
 
 // A texture with one value everywhere (what rgb/float/spectrum parameters become).
 std::shared_ptr<Texture> make_constant_texture(const Color3f& value);
