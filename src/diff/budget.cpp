@@ -65,31 +65,29 @@ double per_sample_variance(const Image& stderr_img, int samples_per_pixel) {
     return v * samples_per_pixel;
 }
 
-} // namespace
+using Stats = std::array<TermStats, Terms>;
 
-PsdrOptions psdr_budget(const Scene& scene, const Parameters& params, const PsdrOptions& base, int spp) {
-    if (spp <= 0) throw Error("the sample budget must be positive");
+// Forward mode: one pilot of every term in PilotBatches batches.
+Stats derivative_stats(const Scene& scene, const Parameters& params, const PsdrOptions& base, int spp) {
     PsdrOptions pilot = pilot_options(base, spp);
     pilot.interior.batches = PilotBatches;
     const PsdrDerivative d = psdr_derivative(scene, params, pilot);
     const std::array<const Image*, Terms> errors = {&d.interior.stderr_img, &d.primary_stderr, &d.direct_stderr,
                                                     &d.indirect_stderr, &d.pixel_stderr};
     const int samples = pilot_spp(spp) * PilotBatches;
-    std::array<TermStats, Terms> stats;
+    Stats stats;
     for (int k = 0; k < Terms; ++k) {
         const SampleCost& c = d.cost[size_t(k)];
         stats[size_t(k)] = {per_sample_variance(*errors[size_t(k)], samples), c.units() / samples, c.rays > 0};
     }
-    return allocate(base, stats, spp, std::max(1, base.interior.batches));
+    return stats;
 }
 
-PsdrOptions psdr_gradient_budget(const Scene& scene, const Parameters& params, const Image& adjoint,
-                                 const PsdrOptions& base, int spp) {
-    if (spp <= 0) throw Error("the sample budget must be positive");
-    std::array<TermStats, Terms> stats;
+// Reverse mode: each term alone, in independent batches: the variance of its gradient vector.
+Stats gradient_stats(const Scene& scene, const Parameters& params, const Image& adjoint, const PsdrOptions& base, int spp) {
+    Stats stats;
     const int per_batch = pilot_spp(spp), samples = per_batch * PilotBatches;
     for (int k = 0; k < Terms; ++k) {
-        // Term k alone, in independent batches: the variance of its gradient vector.
         PsdrOptions pilot = pilot_options(base, spp);
         for (int j = 0; j < Terms; ++j) term_spp(pilot, j) = j == k ? per_batch : 0;
         std::vector<double> sum, sum2;
@@ -109,16 +107,67 @@ PsdrOptions psdr_gradient_budget(const Scene& scene, const Parameters& params, c
         }
         stats[size_t(k)] = {variance * per_batch, cost.units() / samples, cost.rays > 0};
     }
+    return stats;
+}
+
+// The variance × cost of the optimal split, (Σ_k √(V_k c_k))²: what a parameterization costs at its best.
+double optimal_variance_cost(const Stats& stats) {
+    double sum = 0;
+    for (const TermStats& t : stats)
+        if (t.active) sum += std::sqrt(t.variance * t.cost);
+    return sum * sum;
+}
+
+// The split of the better first-vertex parameterization. With a static camera both apply (diff/first_vertex.h)
+// and image space is usually far less noisy, but not always: where a moving surface meets another moving with
+// it (two planes at a right angle, translating together), the image-space vertex stays put while the next one
+// moves with its surface, and the segment between them changes as 1/distance near the contact, a heavy tail the
+// material form (both moving together) does not have. Both are piloted and the lower optimal variance × cost
+// wins; an explicit choice in `base` is kept.
+template <typename StatsOf>
+PsdrOptions choose_and_allocate(const Scene& scene, const Parameters& params, const PsdrOptions& base, int spp,
+                                int batches, const StatsOf& stats_of) {
+    PsdrOptions chosen = base;
+    const bool both = base.interior.first_vertex == FirstVertex::Auto &&
+                      image_space_first_vertex(scene, params, FirstVertex::Auto);
+    chosen.interior.first_vertex = image_space_first_vertex(scene, params, base.interior.first_vertex)
+                                       ? FirstVertex::ImageSpace
+                                       : FirstVertex::Material;
+    Stats stats = stats_of(chosen);
+    if (both) {
+        PsdrOptions material = base;
+        material.interior.first_vertex = FirstVertex::Material;
+        const Stats material_stats = stats_of(material);
+        if (optimal_variance_cost(material_stats) < optimal_variance_cost(stats)) chosen = material, stats = material_stats;
+    }
+    return allocate(chosen, stats, spp, batches);
+}
+
+} // namespace
+
+PsdrOptions psdr_budget(const Scene& scene, const Parameters& params, const PsdrOptions& base, int spp) {
+    if (spp <= 0) throw Error("the sample budget must be positive");
+    return choose_and_allocate(scene, params, base, spp, std::max(1, base.interior.batches),
+                               [&](const PsdrOptions& o) { return derivative_stats(scene, params, o, spp); });
+}
+
+PsdrOptions psdr_gradient_budget(const Scene& scene, const Parameters& params, const Image& adjoint,
+                                 const PsdrOptions& base, int spp) {
+    if (spp <= 0) throw Error("the sample budget must be positive");
     PsdrOptions base1 = base;
     base1.interior.batches = 1;
-    return allocate(base1, stats, spp, 1);
+    return choose_and_allocate(scene, params, base1, spp, 1,
+                               [&](const PsdrOptions& o) { return gradient_stats(scene, params, adjoint, o, spp); });
 }
 
 std::string describe_budget(const PsdrOptions& o) {
     const int b = std::max(1, o.interior.batches);
+    const char* form = o.interior.first_vertex == FirstVertex::ImageSpace ? ", image-space first vertex"
+                       : o.interior.first_vertex == FirstVertex::Material ? ", material-form first vertex"
+                                                                          : "";
     return "interior " + std::to_string(o.interior.spp * b) + ", primary " + std::to_string(o.primary_spp * b) +
            ", direct " + std::to_string(o.direct_spp * b) + ", indirect " + std::to_string(o.indirect_spp * b) +
-           ", pixel " + std::to_string(o.pixel_spp * b) + " spp";
+           ", pixel " + std::to_string(o.pixel_spp * b) + " spp" + form;
 }
 
 } // namespace penumbra

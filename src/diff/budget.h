@@ -7,6 +7,8 @@
 // same for a seed whatever the machine or thread count.
 //   forward mode: V_k = Σ over pixels and channels of the per-sample variance of the derivative image;
 //   reverse mode: V_k = Σ over parameters of the per-sample variance of the gradient for the given adjoint.
+// With a static camera the calibration also picks the first vertex's parameterization (image space or material
+// form, diff/first_vertex.h) whose optimal split has the lower variance × cost, unless `base` fixes it.
 #pragma once
 #include "diff/psdr.h"
 
@@ -21,7 +23,8 @@ PsdrOptions psdr_budget(const Scene& scene, const Parameters& params, const Psdr
 PsdrOptions psdr_gradient_budget(const Scene& scene, const Parameters& params, const Image& adjoint,
                                  const PsdrOptions& base, int spp);
 
-// "interior 12, primary 1500, direct 0, indirect 0, pixel 0 spp" (totals over the batches).
+// "interior 12, primary 1500, direct 0, indirect 0, pixel 0 spp, image-space first vertex" (totals over the
+// batches).
 std::string describe_budget(const PsdrOptions& options);
 
 } // namespace penumbra

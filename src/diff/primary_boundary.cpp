@@ -139,17 +139,15 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
     return result;
 }
 
-// What a probe ray next to the edge sees: the edge's own surface (near), something beyond the edge or nothing
-// (far), or something in front of it (the edge is hidden there).
+// What a probe ray next to the edge sees: something beyond the edge or nothing (far), the edge's own shape in
+// front of or at the edge (near: next to a silhouette of a finely tessellated solid the adjacent face is almost
+// parallel to the ray and is hit well in front of the edge, so no depth band can tell it apart), or another
+// shape in front of the edge (the edge is hidden there).
 enum class Side { Near, Far, Front };
 
 Side classify(const SurfaceInteraction3f& hit, const Shape& shape, float edge_distance) {
-    if (!hit.is_valid()) return Side::Far;
-    // A grazing surface next to a silhouette is seen a little in front of the edge (for a smooth solid of
-    // radius R, by ~√(2Rδ) at a distance δ from the silhouette): a 2% band counts as the edge's own surface.
-    if (hit.shape == &shape && std::abs(hit.t - edge_distance) < 0.02f * edge_distance) return Side::Near;
-    if (hit.t > edge_distance * (1.f + 1e-4f)) return Side::Far;
-    return Side::Front;
+    if (!hit.is_valid() || hit.t > edge_distance * (1.f + 1e-4f)) return Side::Far;
+    return hit.shape == &shape ? Side::Near : Side::Front;
 }
 
 // Where an edge's image crosses the film at fraction t: the film point s, the image-space normal n from side 1
@@ -206,7 +204,14 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
         out.n = n2;
     }
     if (sides[0] != Side::Near) return out;
-    out.valid = se.crease ? sides[1] == Side::Near && out.hit[0].prim_index != out.hit[1].prim_index : sides[1] == Side::Far;
+    if (!se.crease) {
+        out.valid = sides[1] == Side::Far;
+        return out;
+    }
+    // A crease is seen where both sides are the edge's faces at the edge's depth (not another part of the same
+    // shape hiding it).
+    const auto at_edge = [&](int k) { return std::abs(out.hit[k].t - norm(x_edge - out.ray[k].o)) < 0.02f * norm(x_edge - out.ray[k].o); };
+    out.valid = sides[1] == Side::Near && out.hit[0].prim_index != out.hit[1].prim_index && at_edge(0) && at_edge(1);
     return out;
 }
 
