@@ -1,10 +1,14 @@
 #include "cli.h"
 
+#include "core/colormap.h"
 #include "core/error.h"
+#include "core/image.h"
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -24,6 +28,22 @@ std::string lower_extension(const std::string& path) {
     std::string ext = std::filesystem::path(path).extension().string();
     for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
     return ext;
+}
+
+void write_signed(const std::string& path, const Image& image, float scale) {
+    if (lower_extension(path) == ".png") write_image(path, diverging_colormap(image, scale));
+    else write_image(path, image);
+}
+
+void write_z_map(const std::string& path, const Image& a, const Image& b, const Image& sa, const Image& sb) {
+    Image z(a.width, a.height);
+    for (size_t i = 0; i < z.pixels.size(); ++i)
+        for (int k = 0; k < 3; ++k) {
+            const float s = std::hypot(sa.pixels.empty() ? 0.f : sa.pixels[i][k], sb.pixels.empty() ? 0.f : sb.pixels[i][k]);
+            const float d = a.pixels[i][k] - b.pixels[i][k];
+            z.pixels[i][k] = s > 0.f ? std::clamp(d / s, -4.f, 4.f) : (d == 0.f ? 0.f : std::copysign(4.f, d));
+        }
+    write_signed(path, z, 4.f);
 }
 
 ProgressBar::ProgressBar(bool enabled, std::string label)

@@ -1,7 +1,6 @@
 // `penumbra params | derivative | gradient | fd | compare`: differentiation from the command line.
 #include "cli.h"
 
-#include "core/colormap.h"
 #include "diff/budget.h"
 #include "diff/finite_difference.h"
 #include "diff/interior.h"
@@ -141,13 +140,6 @@ std::vector<std::pair<std::string, std::vector<float>>> selection(const std::vec
     std::vector<std::pair<std::string, std::vector<float>>> s;
     for (const std::string& p : params) s.push_back(parse_param_selection(p));
     return s;
-}
-
-// Output by extension: .exr (values) or .png (diverging colormap).
-void write_signed(const std::string& path, const Image& image) {
-    const std::string ext = lower_extension(path);
-    if (ext == ".png") write_image(path, diverging_colormap(image));
-    else write_image(path, image);
 }
 
 void check_output(const std::string& path) {
@@ -332,19 +324,6 @@ void cmd_gradient(const Common& c) {
     }
     std::fprintf(stderr, "gradient of %d parameter scalars at %d spp in %.2f s%s%s\n", params.dimension(), c.spp,
                  g.seconds, c.output.empty() ? "" : " -> ", c.output.c_str());
-}
-
-// Per pixel (D − R) / sqrt(σ_D² + σ_R²), as a diverging colormap (saturated at ±4).
-void write_z_map(const std::string& path, const Image& a, const Image& b, const Image& sa, const Image& sb) {
-    Image z(a.width, a.height);
-    for (size_t i = 0; i < z.pixels.size(); ++i)
-        for (int k = 0; k < 3; ++k) {
-            const float s = std::hypot(sa.pixels.empty() ? 0.f : sa.pixels[i][k], sb.pixels.empty() ? 0.f : sb.pixels[i][k]);
-            const float d = a.pixels[i][k] - b.pixels[i][k];
-            z.pixels[i][k] = s > 0.f ? std::clamp(d / s, -4.f, 4.f) : (d == 0.f ? 0.f : std::copysign(4.f, d));
-        }
-    if (lower_extension(path) == ".png") write_image(path, diverging_colormap(z, 4.f));
-    else write_image(path, z);
 }
 
 void cmd_compare(const std::string& test, const std::string& ref, const std::string& test_se, const std::string& ref_se,

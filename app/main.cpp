@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
     penumbra::cli::add_diff_commands(app);
     penumbra::cli::add_optimize_command(app);
     penumbra::cli::add_study_commands(app);
+    penumbra::cli::add_suite_command(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 namespace fs = std::filesystem;
@@ -83,4 +84,29 @@ TEST(CLI, RejectsUnknownOutputFormatBeforeRendering) {
     const Result r = run("render " + cbox + " -o out.tiff");
     EXPECT_EQ(r.status, 1);
     EXPECT_NE(r.output.find(".exr or .png"), std::string::npos) << r.output;
+}
+
+// `ad-suite` on one scene at a tiny resolution: the table row, the pictures, and the reference reused from the
+// cache on the second run.
+TEST(CLI, AdSuiteWritesItsTableAndPicturesAndReusesTheReference) {
+    const fs::path dir = temp_dir() / "ad_suite";
+    fs::remove_all(dir);
+    const std::string args = "ad-suite --manifest " + std::string(PENUMBRA_SOURCE_DIR) +
+                             "/scenes/mitsuba_ad/suite.json --only translate_rectangle_emitter_on_black --res 16 "
+                             "--fd-spp-scale 0.25 -q --cache " + dir.string() + " -o " + (dir / "report.md").string();
+    const Result first = run(args);
+    ASSERT_EQ(first.status, 0) << first.output;
+    std::ifstream report(dir / "report.md");
+    const std::string table((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+    EXPECT_NE(table.find("| translate_rectangle_emitter_on_black | 1024 |"), std::string::npos) << table;
+    for (const char* suffix : {"_derivative.png", "_fd.png", "_z.png", "_fd.exr", "_fd_stderr.exr", "_fd.json"})
+        EXPECT_TRUE(fs::exists(dir / (std::string("translate_rectangle_emitter_on_black") + suffix))) << suffix;
+    const Result second = run(args);
+    EXPECT_EQ(second.status, 0) << second.output;
+    EXPECT_NE(second.output.find("(cached)"), std::string::npos) << second.output;
+
+    const Result unknown = run("ad-suite --only no_such_scene --manifest " + std::string(PENUMBRA_SOURCE_DIR) +
+                               "/scenes/mitsuba_ad/suite.json --cache " + dir.string());
+    EXPECT_EQ(unknown.status, 1);
+    EXPECT_NE(unknown.output.find("no scene 'no_such_scene'"), std::string::npos) << unknown.output;
 }
