@@ -67,7 +67,7 @@ AdSuite load_ad_suite(const std::string& manifest) {
         s.name = field<std::string>(entry, "name", where);
         const std::string named = where + " (" + s.name + ")";
         reject_unknown(entry, {"name", "file", "params", "spp", "fd_eps", "fd_spp", "ci_res", "ci_fd_eps", "ci_fd_spp",
-                               "optional", "requires", "fd_note", "known_issue"},
+                               "optional", "requires", "fd_note"},
                        named);
         for (const AdSuiteScene& other : suite.scenes)
             if (other.name == s.name) throw Error(named + ": a scene of this name comes earlier");
@@ -84,7 +84,6 @@ AdSuite load_ad_suite(const std::string& manifest) {
         if (entry.contains("requires"))
             for (const std::string& f : field<std::vector<std::string>>(entry, "requires", named))
                 s.requires_files.push_back((dir / f).lexically_normal().string());
-        if (entry.contains("known_issue")) s.known_issue = field<std::string>(entry, "known_issue", named);
         suite.scenes.push_back(std::move(s));
     }
     if (suite.scenes.empty()) throw Error(manifest + ": no scenes");

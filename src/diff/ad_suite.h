@@ -27,7 +27,6 @@ struct AdSuiteScene {
     int ci_fd_spp = 0;                 // the CI test's reference samples per pixel and side
     bool optional = false;             // may be skipped when files it needs are absent
     std::vector<std::string> requires_files; // files an optional scene needs (relative to the manifest)
-    std::string known_issue;           // an open estimator problem this scene shows (the CI test reports, not fails)
 };
 
 struct AdSuite {

@@ -42,8 +42,12 @@ BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, c
     const Vec2f s = is_vertical ? Vec2f(float(k), t) : Vec2f(t, float(k));
     const Vec2f across = is_vertical ? Vec2f(1.f, 0.f) : Vec2f(0.f, 1.f);
 
-    // L(s): the radiance seen through s (the same on both sides of the edge, the filter alone jumps).
-    const auto [ray, ray_weight] = sensor.sample_ray(s, sampler.next_2d());
+    // L(s): the radiance seen through s, where the filter alone jumps. Where a discontinuity of the image lies
+    // exactly on the pixel edge (an axis-aligned shadow or silhouette seen head-on) the two sides' limits differ
+    // and the pixels are not differentiable there: their symmetric derivative, which central differences give,
+    // takes the mean of the two, so L is taken just off the edge on a random side.
+    const Vec2f side = across * (sampler.next_1d() < 0.5f ? -1e-4f : 1e-4f);
+    const auto [ray, ray_weight] = sensor.sample_ray(s + side, sampler.next_2d());
     ++rays.rays;
     const SurfaceInteraction3f hit = scene.intersect(ray);
     if (!hit.is_valid()) return out; // the environment seen directly does not move with the geometry

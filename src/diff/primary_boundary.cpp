@@ -139,15 +139,17 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
     return result;
 }
 
-// What a probe ray next to the edge sees: something beyond the edge or nothing (far), the edge's own shape in
-// front of or at the edge (near: next to a silhouette of a finely tessellated solid the adjacent face is almost
-// parallel to the ray and is hit well in front of the edge, so no depth band can tell it apart), or another
-// shape in front of the edge (the edge is hidden there).
+// What a probe ray next to the edge sees: the edge's own shape (near): in front of the edge, however far (next to
+// a silhouette of a finely tessellated solid the adjacent face is almost parallel to the ray and is hit well in
+// front of the edge), or a little behind it (a surface receding from its edge, within 2% of the edge's depth);
+// something beyond the edge or nothing (far); or another shape in front of the edge (the edge is hidden there).
 enum class Side { Near, Far, Front };
 
 Side classify(const SurfaceInteraction3f& hit, const Shape& shape, float edge_distance) {
-    if (!hit.is_valid() || hit.t > edge_distance * (1.f + 1e-4f)) return Side::Far;
-    return hit.shape == &shape ? Side::Near : Side::Front;
+    if (!hit.is_valid()) return Side::Far;
+    const bool beyond = hit.t > edge_distance * (1.f + 1e-4f);
+    if (hit.shape == &shape && (!beyond || hit.t < edge_distance * 1.02f)) return Side::Near;
+    return beyond ? Side::Far : Side::Front;
 }
 
 // Where an edge's image crosses the film at fraction t: the film point s, the image-space normal n from side 1
@@ -194,8 +196,18 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
         sides[k] = classify(out.hit[k], *se.shape, norm(x_edge - out.ray[k].o));
     }
     rays.rays += 2;
-    // Order the sides so that the first is the edge's own (near) one; n points from it to the other.
-    out.n = n2 * -1.f;
+    out.n = n2 * -1.f; // from side 0 (probed at +eps) to side 1
+    if (se.crease) {
+        // A crease is seen where both sides are the edge's own faces at the edge's depth (a convex ridge recedes
+        // on both sides, a valley comes closer), not another part of the same shape hiding it.
+        const auto at_edge = [&](int k) {
+            const float d = norm(x_edge - out.ray[k].o);
+            return out.hit[k].is_valid() && out.hit[k].shape == se.shape && std::abs(out.hit[k].t - d) < 0.02f * d;
+        };
+        out.valid = at_edge(0) && at_edge(1) && out.hit[0].prim_index != out.hit[1].prim_index;
+        return out;
+    }
+    // A silhouette: order the sides so that the first is the edge's own (near) one, n pointing to the other.
     if (sides[0] != Side::Near) {
         std::swap(out.ray[0], out.ray[1]);
         std::swap(out.hit[0], out.hit[1]);
@@ -203,15 +215,7 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
         std::swap(sides[0], sides[1]);
         out.n = n2;
     }
-    if (sides[0] != Side::Near) return out;
-    if (!se.crease) {
-        out.valid = sides[1] == Side::Far;
-        return out;
-    }
-    // A crease is seen where both sides are the edge's faces at the edge's depth (not another part of the same
-    // shape hiding it).
-    const auto at_edge = [&](int k) { return std::abs(out.hit[k].t - norm(x_edge - out.ray[k].o)) < 0.02f * norm(x_edge - out.ray[k].o); };
-    out.valid = sides[1] == Side::Near && out.hit[0].prim_index != out.hit[1].prim_index && at_edge(0) && at_edge(1);
+    out.valid = sides[0] == Side::Near && sides[1] == Side::Far;
     return out;
 }
 

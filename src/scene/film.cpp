@@ -8,7 +8,7 @@
 //   sample_border     boolean  false     (true is not supported)
 //   crop_offset_x/y, crop_width/height   (only the full frame is supported)
 //   rfilter           nested   gaussian
-// box:      radius 0.5 (fixed)                       f(x) = 1 for |x| <= 1/2
+// box:      radius 0.5 (fixed)                       f(x) = 1 for |x| < 1/2 (1/2 at |x| = 1/2)
 // tent:     radius float 1                           f(x) = max(0, 1 - |x| / radius)
 // gaussian: stddev float 0.5, radius = 4 stddev      f(x) = max(0, exp(-x^2 / (2 stddev^2)) - exp(-radius^2 /
 // (2 stddev^2)))
@@ -76,9 +76,13 @@ class BoxFilter final : public FilterBase<BoxFilter> {
         radius_ = 0.5f;
         init_sampling();
     }
+    // f = 1 inside, ½ exactly on the pixel's edge: a film position on the edge between two pixels counts half in
+    // each (a splat there — a discontinuity lying exactly on a pixel edge, as in axis-aligned scenes seen head-on —
+    // then gives the symmetric derivative, the one central differences converge to, instead of counting twice).
     template <typename T> T eval_t(const T& x) const {
         using std::abs;
-        return T(abs(x) <= T(radius_) ? 1.f : 0.f);
+        const float a = std::abs(detach(x));
+        return T(a < radius_ ? 1.f : (a == radius_ ? 0.5f : 0.f));
     }
 };
 
