@@ -94,8 +94,9 @@ struct BoundarySegment {
 };
 
 // Extends source → x_B beyond the edge to the receiver x_D0. Invalid when the edge does not graze the line,
-// the segment source → x_B is blocked, nothing (or no BSDF) lies beyond, or the two sides of the curve do not
-// differ in visibility. Records the velocity on the thread's tape.
+// the segment source → x_B is blocked, nothing (or no BSDF) lies beyond, or the curve degenerates. The lit side
+// is lit (source → x_B → x_D0 is clear); the occluded side is the one the edge's faces lie on. Records the
+// velocities on the thread's tape.
 BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& form, const SegmentSource& source,
                                        const EdgePoint& x_b, RayCounter& rays);
 
