@@ -213,11 +213,7 @@ void cmd_derivative(const Common& c, bool no_antithetic) {
     if (!c.stderr_output.empty()) write_image(c.stderr_output, total ? d.total_stderr : d.interior.stderr_img);
     if (!c.terms_prefix.empty()) {
         // Each term's image (and, with --stderr, its standard error as PREFIX_<term>_stderr.exr).
-        const std::array<std::pair<const Image*, const Image*>, 5> terms = {{{&d.interior.derivative, &d.interior.stderr_img},
-                                                                             {&d.primary, &d.primary_stderr},
-                                                                             {&d.direct, &d.direct_stderr},
-                                                                             {&d.indirect, &d.indirect_stderr},
-                                                                             {&d.pixel, &d.pixel_stderr}}};
+        const auto terms = d.terms();
         for (size_t k = 0; k < terms.size(); ++k) {
             if (k > 0 && !total) break;
             if (k == 4 && !needs_pixel_boundary(*scene, params, o.interior.first_vertex)) continue;

@@ -39,4 +39,12 @@ inline Vec2f stratified_2d(uint32_t m, uint32_t n, uint32_t seed, const Vec2f& u
     return Vec2f((float(m) + u.x) / float(n), (float(permute(m, n, seed)) + u.y) / float(n));
 }
 
+// Sample `index` of the `count` samples of a pixel, its strata permuted per (seed, pixel).
+struct PixelStratum {
+    uint32_t index, count, seed;
+    PixelStratum(int sample, int samples, uint64_t seed_value, uint64_t pixel)
+        : index(uint32_t(sample)), count(uint32_t(samples)), seed(uint32_t(mix_bits(seed_value ^ pixel))) {}
+    Vec2f operator()(const Vec2f& u) const { return stratified_2d(index, count, seed, u); }
+};
+
 } // namespace penumbra

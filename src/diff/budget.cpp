@@ -72,13 +72,12 @@ Stats derivative_stats(const Scene& scene, const Parameters& params, const PsdrO
     PsdrOptions pilot = pilot_options(base, spp);
     pilot.interior.batches = PilotBatches;
     const PsdrDerivative d = psdr_derivative(scene, params, pilot);
-    const std::array<const Image*, Terms> errors = {&d.interior.stderr_img, &d.primary_stderr, &d.direct_stderr,
-                                                    &d.indirect_stderr, &d.pixel_stderr};
+    const auto terms = d.terms();
     const int samples = pilot_spp(spp) * PilotBatches;
     Stats stats;
     for (int k = 0; k < Terms; ++k) {
         const SampleCost& c = d.cost[size_t(k)];
-        stats[size_t(k)] = {per_sample_variance(*errors[size_t(k)], samples), c.units() / samples, c.rays > 0};
+        stats[size_t(k)] = {per_sample_variance(*terms[size_t(k)].second, samples), c.units() / samples, c.rays > 0};
     }
     return stats;
 }

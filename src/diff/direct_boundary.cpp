@@ -3,8 +3,6 @@
 #include "diff/detector_subpath.h"
 #include "scene/shape_interaction.h"
 
-#include <algorithm>
-
 namespace penumbra {
 
 namespace {
@@ -31,13 +29,12 @@ BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edg
     // emitter selection, stratifies the edge points), and a light point: point lights at their position, area
     // lights by area; directional and environment emitters give a direction (from infinity), the latter by
     // their solid-angle density.
+    if (scene.emitters.empty()) return out;
     float u_edge = index.stratified(sampler), select_pdf = 0.f;
-    const Emitter* emitter = scene.sample_emitter(u_edge, select_pdf);
+    const size_t emitter_index = scene.sample_emitter_index(u_edge, select_pdf);
+    const Emitter* emitter = scene.emitters[emitter_index].get();
     const Vec2f u2 = sampler.next_2d();
-    if (!emitter) return out;
-    const EdgeSet& shadow_edges = edges.lit[size_t(std::find_if(scene.emitters.begin(), scene.emitters.end(), [&](const auto& e) {
-                                                       return e.get() == emitter;
-                                                   }) - scene.emitters.begin())];
+    const EdgeSet& shadow_edges = edges.lit[emitter_index];
     if (shadow_edges.empty()) return out;
     const EdgePoint x_b = sample_edge_point(edges, shadow_edges, u_edge);
     SegmentSource light;

@@ -38,19 +38,14 @@ FilmSample sample_film(const ReconstructionFilter& filter, Sampler& sampler, boo
     return {offset, pdf};
 }
 
-// Sample `index` of the `count` samples a pixel gets, and the seed of its strata's permutation.
-struct FilmStratum {
-    uint32_t index, count, seed;
-};
-
 // One camera path of pixel (x, y) with the image-space first vertex: the film position is drawn by filter
-// importance sampling, as the renderer does (stratified over the pixel's samples), and its ray stays fixed; x1(θ) slides along it with the surface
-// (MaterialForm::ray_vertex). The camera factor W_j / p is the renderer's sample weight, independent of θ.
+// importance sampling, as the renderer does (stratified over the pixel's samples), and its ray stays fixed;
+// x1(θ) slides along it with the surface (MaterialForm::ray_vertex). The camera factor W_j / p is the renderer's sample weight, independent of θ.
 Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sampler& sampler, int x, int y,
-                               const FilmStratum& stratum, const PathSettings& settings, RayCounter& rays) {
+                               const PixelStratum& stratum, const PathSettings& settings, RayCounter& rays) {
     const Sensor& sensor = *scene.sensor;
     const Vec2f offset =
-        sensor.film->rfilter->sample(stratified_2d(stratum.index, stratum.count, stratum.seed, sampler.next_2d()));
+        sensor.film->rfilter->sample(stratum(sampler.next_2d()));
     const auto [ray, ray_weight] = sensor.sample_ray(Vec2f(x + 0.5f + offset.x, y + 0.5f + offset.y), sampler.next_2d());
     ++rays.rays;
     const SurfaceInteraction3f first = scene.intersect(ray);
@@ -65,7 +60,7 @@ Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sam
 // W_j / p = P_j(s(θ)) |ds/dA|(θ) J(p1) / (p_s |ds/dA|(θ0)) (the pinhole importance of Eqs. 22-23 written on the
 // film, P_j the normalized reconstruction filter of pixel j, s the projection of x1).
 Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sampler& sampler, int x, int y,
-                                const FilmStratum& stratum, bool mirror, const PathSettings& settings, RayCounter& rays) {
+                                const PixelStratum& stratum, bool mirror, const PathSettings& settings, RayCounter& rays) {
     if (form.image_space_first_vertex()) return sample_image_space(scene, form, sampler, x, y, stratum, settings, rays);
     const Sensor& sensor = *scene.sensor;
     const ReconstructionFilter& filter = *sensor.film->rfilter;
@@ -124,7 +119,7 @@ PixelSums forward_batch(const Scene& scene, const Parameters& params, const Diff
                     const bool mirror = antithetic && (m & 1);
                     sampler.start(seed, pixel, uint64_t(antithetic ? m / 2 : m));
                     tape.clear();
-                    const FilmStratum stratum{uint32_t(m), uint32_t(options.spp), uint32_t(mix_bits(seed ^ pixel))};
+                    const PixelStratum stratum(m, options.spp, seed, pixel);
                     const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, settings, rays);
                     tape_nodes += tape.size();
                     if (!finite(c)) continue;
@@ -202,7 +197,7 @@ Gradient render_gradient(const Scene& scene, const Parameters& params, const Ima
                     const bool mirror = antithetic && (m & 1);
                     sampler.start(options.seed, pixel, uint64_t(antithetic ? m / 2 : m));
                     tape.clear();
-                    const FilmStratum stratum{uint32_t(m), uint32_t(options.spp), uint32_t(mix_bits(options.seed ^ pixel))};
+                    const PixelStratum stratum(m, options.spp, options.seed, pixel);
                     const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, options.path, rays);
                     tape_nodes += tape.size();
                     if (!finite(c)) continue;

@@ -9,7 +9,6 @@
 #include "diff/sample_cost.h"
 #include "render/path_tracer.h"
 
-#include <atomic>
 #include <functional>
 
 namespace penumbra {
@@ -25,12 +24,6 @@ struct DiffOptions {
     std::function<void(float)> progress;
 };
 
-// Integer counts summed from worker threads (the total does not depend on the order).
-struct SharedSampleCost {
-    std::atomic<uint64_t> samples{0}, rays{0}, tape_nodes{0};
-    void add(const SampleCost& c) { samples += c.samples, rays += c.rays, tape_nodes += c.tape_nodes; }
-    SampleCost get() const { return {samples.load(), rays.load(), tape_nodes.load()}; }
-};
 
 struct DerivativeImage {
     Image primal;      // the image estimated from the same samples (detached values)

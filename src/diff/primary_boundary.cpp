@@ -13,7 +13,8 @@
 namespace penumbra {
 
 // The edges whose image the primary term samples: silhouettes seen from the reference camera and, with the
-// image-space first vertex, creases of meshes shaded with face normals (the shading jumps there). Each keeps
+// image-space first vertex, creases where the shading jumps (face normals, hard edges, uv seams of textured
+// shapes). Each keeps
 // the part of the edge that lies in front of the camera and projects within the film (plus the filter's
 // reach), with its projection.
 struct PrimaryBoundary::Silhouettes {
@@ -271,7 +272,7 @@ constexpr uint64_t Salt = 0xB5AD4ECEDA1CE2A9ULL, GuideSalt = 0x2127599BF4325C37U
 // density that minimizes the variance of a sum of jumps, while the uniform half keeps every edge's density
 // bounded below where the pilot saw nothing. The pilot (1/16 of the term's samples, at most 8 crossings per
 // edge, none when the edges outnumber it) only shapes the density: its samples are not in the estimate.
-void guide(const Scene& scene, Silhouettes& sil, const PathSettings& settings, const BoundaryOptions& options) {
+void guide(const Scene& scene, Silhouettes& sil, const BoundaryOptions& options) {
     const Film& film = *scene.sensor->film;
     const uint64_t budget = uint64_t(film.width) * film.height * uint64_t(options.samples_per_pixel) / 16;
     const size_t n = sil.edges.size();
@@ -289,7 +290,7 @@ void guide(const Scene& scene, Silhouettes& sil, const PathSettings& settings, c
                 const float t = (float(k) + sampler.next_1d()) / float(per_edge);
                 const EdgeCrossing c = cross_edge(scene, sil.edges[e], t, sampler, rays);
                 if (!c.valid) continue;
-                const Color3f j = jump(scene, c, sil.image_space, settings, sampler, rays);
+                const Color3f j = jump(scene, c, sil.image_space, options.path, sampler, rays);
                 sum2 += sqr(double(j.x) + j.y + j.z);
             }
             rms[e] = float(std::sqrt(sum2 / per_edge));
@@ -308,7 +309,7 @@ void guide(const Scene& scene, Silhouettes& sil, const PathSettings& settings, c
 std::unique_ptr<const Silhouettes> prepare(const Scene& scene, const SceneEdges& edges, const Parameters& params,
                                            const MaterialForm& form, const BoundaryOptions& options) {
     auto sil = find_silhouettes(scene, edges, params, form.image_space_first_vertex());
-    if (!sil->edges.empty()) guide(scene, *sil, options.path, options);
+    if (!sil->edges.empty()) guide(scene, *sil, options);
     return sil;
 }
 

@@ -11,6 +11,7 @@
 #include "diff/primary_boundary.h"
 
 #include <array>
+#include <utility>
 
 namespace penumbra {
 
@@ -38,6 +39,12 @@ struct PsdrDerivative {
     // What each term cost, in the order interior, primary, direct, indirect, pixel.
     std::array<SampleCost, 5> cost;
     std::array<double, 5> seconds{};
+
+    // Each term's image and standard error, in that order.
+    std::array<std::pair<const Image*, const Image*>, 5> terms() const {
+        return {{{&interior.derivative, &interior.stderr_img}, {&primary, &primary_stderr}, {&direct, &direct_stderr},
+                 {&indirect, &indirect_stderr}, {&pixel, &pixel_stderr}}};
+    }
 };
 
 // The terms' names in that order.

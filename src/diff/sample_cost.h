@@ -1,6 +1,7 @@
 // The work an estimator did, counted deterministically (unlike wall time, it does not depend on the machine or
 // the thread count), so that sample budgets derived from it keep results reproducible per seed.
 #pragma once
+#include <atomic>
 #include <cstdint>
 
 namespace penumbra {
@@ -22,6 +23,13 @@ struct SampleCost {
         samples += o.samples, rays += o.rays, tape_nodes += o.tape_nodes;
         return *this;
     }
+};
+
+// Integer counts summed from worker threads (the total does not depend on the order).
+struct SharedSampleCost {
+    std::atomic<uint64_t> samples{0}, rays{0}, tape_nodes{0};
+    void add(const SampleCost& c) { samples += c.samples, rays += c.rays, tape_nodes += c.tape_nodes; }
+    SampleCost get() const { return {samples.load(), rays.load(), tape_nodes.load()}; }
 };
 
 } // namespace penumbra

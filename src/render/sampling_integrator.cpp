@@ -35,7 +35,7 @@ std::vector<Layer> SamplingIntegrator::render(const Scene& scene, const RenderOp
                     // Filter importance sampling: the pixel estimate is ∫ f(x - x_j) L(x) dx with f normalized.
                     const Vec2f u = sampler.next_2d();
                     const Vec2f offset = film.rfilter->sample(
-                        options.stratified ? stratified_2d(uint32_t(s), uint32_t(spp), uint32_t(mix_bits(options.seed ^ pixel)), u) : u);
+                        options.stratified ? PixelStratum(s, spp, options.seed, pixel)(u) : u);
                     const Vec2f pos(x + 0.5f + offset.x, y + 0.5f + offset.y);
                     const auto [ray, weight] = sensor.sample_ray(pos, sampler.next_2d());
                     ++counter.rays;

@@ -136,13 +136,17 @@ float Scene::pdf_emitter_direction(const Interaction3f& ref, const DirectionSamp
     return ds.emitter->pdf_direction(ref, ds) / float(emitters.size());
 }
 
-const Emitter* Scene::sample_emitter(float& u, float& pdf) const {
-    if (emitters.empty()) return nullptr;
+size_t Scene::sample_emitter_index(float& u, float& pdf) const {
     const size_t n = emitters.size();
     const size_t index = std::min(size_t(u * float(n)), n - 1);
     u = u * float(n) - float(index);
     pdf = 1.f / float(n);
-    return emitters[index].get();
+    return index;
+}
+
+const Emitter* Scene::sample_emitter(float& u, float& pdf) const {
+    if (emitters.empty()) return nullptr;
+    return emitters[sample_emitter_index(u, pdf)].get();
 }
 
 Color3f Scene::eval_environment(const Vec3f& d) const {

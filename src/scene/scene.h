@@ -43,6 +43,8 @@ public:
     float pdf_emitter_direction(const Interaction3f& ref, const DirectionSample3f& ds) const;
     // Samples an emitter for light tracing; returns the emitter and sets `pdf` to its selection probability.
     const Emitter* sample_emitter(float& u, float& pdf) const;
+    // The same as an index into `emitters` (the scene must have emitters).
+    size_t sample_emitter_index(float& u, float& pdf) const;
     // Radiance from all infinite emitters along an escaped ray direction.
     Color3f eval_environment(const Vec3f& d) const;
 
