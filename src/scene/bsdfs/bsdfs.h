@@ -34,6 +34,8 @@ BSDFPtr make_blendbsdf(TexturePtr weight, BSDFPtr first, BSDFPtr second);
 BSDFPtr make_twosided(BSDFPtr front, BSDFPtr back); // back may be null (front used on both sides)
 BSDFPtr make_mask(TexturePtr opacity, BSDFPtr nested);
 BSDFPtr make_null_bsdf();
+BSDFPtr make_normalmap(TexturePtr normalmap, BSDFPtr nested);
+BSDFPtr make_bumpmap(TexturePtr height, float scale, BSDFPtr nested);
 
 BSDFPtr load_diffuse(const Properties& props);
 BSDFPtr load_conductor(const Properties& props);
@@ -47,6 +49,8 @@ BSDFPtr load_blendbsdf(const Properties& props);
 BSDFPtr load_twosided(const Properties& props);
 BSDFPtr load_mask(const Properties& props);
 BSDFPtr load_null_bsdf(const Properties& props);
+BSDFPtr load_normalmap(const Properties& props);
+BSDFPtr load_bumpmap(const Properties& props);
 
 // --- parameter helpers shared by the loaders (factory.cpp) ---
 // Mitsuba's named dielectric IORs ("bk7", "air", ...); a float value is used as is.

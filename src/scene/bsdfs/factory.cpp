@@ -132,7 +132,9 @@ std::shared_ptr<Object> make_bsdf(const Properties& props, const LoadContext&) {
                                                           {"blendbsdf", load_blendbsdf},
                                                           {"twosided", load_twosided},
                                                           {"mask", load_mask},
-                                                          {"null", load_null_bsdf}};
+                                                          {"null", load_null_bsdf},
+                                                          {"normalmap", load_normalmap},
+                                                          {"bumpmap", load_bumpmap}};
     const auto it = loaders.find(props.plugin());
     if (it == loaders.end()) throw_unsupported_plugin(props, ObjectKind::BSDF);
     return it->second(props);
