@@ -3,6 +3,8 @@
 // CDF (Mitsuba 3's scheme). D, G1, G and pdf are templated on the scalar type; sampling is float only.
 #pragma once
 #include "core/frame.h"
+#include "core/fresnel.h"
+#include "core/quadrature.h"
 
 #include <algorithm>
 #include <cmath>
@@ -163,6 +165,39 @@ private:
         return {erfinv(float(b)), erfinv(float(2.0 * std::max(double(u.y), 1e-6) - 1.0))};
     }
 };
+
+// Directional albedos of a rough dielectric interface (relative IOR eta) lit from wi (wi.z > 0), as Mitsuba's
+// eval_reflectance / eval_transmittance tabulate them: expectations over visible normals m ~ D_wi of
+//   reflection:   F(wi.m) G1(wo, m),        wo = reflect(wi, m)        (zero unless wo.z > 0)
+//   transmission: (1 - F(wi.m)) G1(wo, m),  wo = refract(wi, m)        (zero unless wo.z < 0)
+// by an n x n Gauss-Legendre rule on the sampling square (n = 32 for eta > 1, else 128: total internal
+// reflection makes the integrand rougher). 1 - reflection != transmission: masking of the outgoing
+// direction removes energy from both.
+enum class InterfaceLobe { Reflection, Transmission };
+inline float rough_interface_albedo(MicrofacetDistribution<float> distr, const Vec3f& wi, float eta,
+                                    InterfaceLobe lobe) {
+    distr.sample_visible = true;
+    const int n = eta > 1.f ? 32 : 128;
+    std::vector<double> nodes, weights;
+    gauss_legendre(n, nodes, weights);
+    double sum = 0.0;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            const Vec2f u(float(0.5 * nodes[j] + 0.5), float(0.5 * nodes[i] + 0.5));
+            const Vec3f m = distr.sample(wi, u);
+            const FresnelDielectric<float> f = fresnel_dielectric(dot(wi, m), eta);
+            float value;
+            if (lobe == InterfaceLobe::Reflection) {
+                const Vec3f wo = reflect(wi, m);
+                value = wo.z > 0.f ? f.F * distr.G1(wo, m) : 0.f;
+            } else {
+                const Vec3f wo = refract(wi, m, f.cos_theta_t, f.eta_ti);
+                value = wo.z < 0.f ? (1.f - f.F) * distr.G1(wo, m) : 0.f;
+            }
+            sum += 0.25 * weights[i] * weights[j] * value;
+        }
+    return float(sum);
+}
 
 // Differential microfacet sampling (paper 002 §4.1, after Zeltner et al. 2021): the positivization of
 // ∂D/∂α(m) cos θ_m for an isotropic roughness α. With s = tan²θ_m / α², the derivative changes sign at s = 1
