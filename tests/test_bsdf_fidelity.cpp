@@ -2,6 +2,7 @@
 // dielectric coating estimated independently by Monte Carlo through the roughdielectric BSDF.
 #include "core/microfacet.h"
 #include "core/rng.h"
+#include "core/spectrum.h"
 #include "scene/bsdfs/bsdfs.h"
 
 #include <gtest/gtest.h>
@@ -111,8 +112,49 @@ TEST(RoughPlasticFidelity, GaussLegendreIsExactForPolynomials) {
         gauss_legendre(n, x, w);
         for (int k = 0; k <= std::min(2 * n - 1, 40); ++k) {
             double sum = 0;
-            for (int i = 0; i < n; ++i) sum += w[i] * std::pow(x[i], k);
+            for (int i = 0; i < n; ++i)
+                sum += w[i] * std::pow(x[i], k);
             EXPECT_NEAR(sum, k % 2 == 0 ? 2.0 / (k + 1) : 0.0, 1e-12) << "n " << n << ", degree " << k;
         }
+    }
+}
+
+// Mitsuba clamps microfacet roughness to at least 1e-4 (MicrofacetDistribution::configure()), so a textured
+// roughness that reaches 0 (a checkerboard patch of color 0) renders as a very smooth surface. Here: an
+// anisotropic Beckmann a-C conductor whose alpha_u is 0 on one patch evaluates, samples and weighs exactly as
+// with alpha_u = 1e-4, with finite values; and a-C's RGB Fresnel reflectance at normal incidence is the
+// closed form ((n - 1)^2 + k^2) / ((n + 1)^2 + k^2) per channel.
+TEST(RoughConductorFidelity, ZeroTexturedRoughnessIsClampedAsMitsuba) {
+    Color3f eta, k;
+    ASSERT_TRUE(conductor_ior("a-C", eta, k));
+    auto make = [&](float au) {
+        RoughnessParams r;
+        r.type = MicrofacetType::Beckmann;
+        r.alpha_u = tex(au);
+        r.alpha_v = tex(0.3f);
+        return make_roughconductor(r, make_constant_texture(eta), make_constant_texture(k), tex(1.f));
+    };
+    const BSDFPtr zero = make(0.f), clamped_alpha = make(1e-4f);
+    PCG32 rng(21);
+    BSDFContext ctx;
+    for (int i = 0; i < 2000; ++i) {
+        SurfaceInteraction3f si;
+        const float z = 0.05f + 0.95f * rng.next_float(), phi = 2.f * Pi * rng.next_float();
+        si.wi = Vec3f(std::sqrt(1.f - z * z) * std::cos(phi), std::sqrt(1.f - z * z) * std::sin(phi), z);
+        const float u1 = rng.next_float();
+        const Vec2f u2(rng.next_float(), rng.next_float());
+        const auto [bs_zero, w_zero] = zero->sample(ctx, si, u1, u2);
+        const auto [bs_clamped, w_clamped] = clamped_alpha->sample(ctx, si, u1, u2);
+        ASSERT_TRUE(std::isfinite(w_zero.x) && std::isfinite(bs_zero.pdf));
+        EXPECT_EQ(w_zero.x, w_clamped.x);
+        EXPECT_EQ(bs_zero.pdf, bs_clamped.pdf);
+        const Color3f f = zero->eval(ctx, si, bs_zero.wo);
+        EXPECT_TRUE(std::isfinite(f.x) && std::isfinite(f.y) && std::isfinite(f.z));
+        EXPECT_EQ(f.y, clamped_alpha->eval(ctx, si, bs_zero.wo).y);
+    }
+    for (int c = 0; c < 3; ++c) {
+        const double n = eta[c], kk = k[c];
+        const double normal = (sqr(n - 1) + kk * kk) / (sqr(n + 1) + kk * kk);
+        EXPECT_NEAR(fresnel_conductor(1.f, eta[c], k[c]), normal, 1e-6) << "channel " << c;
     }
 }
