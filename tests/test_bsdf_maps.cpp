@@ -228,3 +228,28 @@ TEST(BumpMap, DerivativeWrtTheHeightDataAndScaleMatchesFiniteDifferences) {
     expect_matches_fd(xml, dir.str(), {"mat.nested_texture.data", direction}, 1e-1);
     expect_matches_fd(xml, dir.str(), {"mat.scale", {}}, 0.3);
 }
+
+// Bad input: a one-line LoadError naming the plugin and what is missing.
+TEST(BumpMap, MissingOrExtraChildrenAreLoadErrors) {
+    auto expect_error = [](const std::string& bsdf, const std::string& fragment) {
+        try {
+            load_scene_string(scene(R"(<shape type="sphere">)" + bsdf + "</shape>"));
+            ADD_FAILURE() << "no error for " << bsdf;
+        } catch (const LoadError& e) {
+            EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+        }
+    };
+    expect_error(R"(<bsdf type="bumpmap"><bsdf type="diffuse"/></bsdf>)",
+                 "bumpmap: expected exactly one nested height-map texture, got 0");
+    expect_error(
+        R"(<bsdf type="bumpmap"><texture type="checkerboard"/><texture type="checkerboard"/><bsdf type="diffuse"/></bsdf>)",
+        "got 2");
+    expect_error(R"(<bsdf type="bumpmap"><texture type="checkerboard"/></bsdf>)",
+                 "bumpmap: expected exactly one nested BSDF, got 0");
+    expect_error(R"(<bsdf type="normalmap"><bsdf type="diffuse"/></bsdf>)", "normalmap");
+    expect_error(R"(<bsdf type="normalmap"><rgb name="normalmap" value="0.5,0.5,1"/></bsdf>)",
+                 "normalmap: expected exactly one nested BSDF, got 0");
+    expect_error(
+        R"(<bsdf type="bumpmap"><float name="scal" value="2"/><texture type="checkerboard"/><bsdf type="diffuse"/></bsdf>)",
+        "scal");
+}
