@@ -19,6 +19,8 @@
 #include "core/warp.h"
 #include "scene/bsdfs/bsdfs.h"
 
+#include <tbb/parallel_for.h>
+
 #include <array>
 
 namespace penumbra {
@@ -41,14 +43,17 @@ public:
         const Color3f d = diffuse_->mean(), s = specular_->mean();
         const float dm = (d.x + d.y + d.z) / 3.f, sm = (s.x + s.y + s.z) / 3.f;
         specular_weight_ = sm / (dm + sm);
-        double internal = 0.0;
-        for (int i = 0; i < AlbedoRes; ++i) {
+        // Table entries in parallel (each is a 32^2 or 128^2 quadrature), summed in order: deterministic.
+        std::array<float, AlbedoRes> internal{};
+        tbb::parallel_for(0, AlbedoRes, [&](int i) {
             const float mu = std::max(1e-6f, float(i) / (AlbedoRes - 1));
             const Vec3f wi(std::sqrt(1.f - mu * mu), 0.f, mu);
             external_transmittance_[i] = rough_interface_albedo(distr_, wi, eta_, InterfaceLobe::Transmission);
-            internal += rough_interface_albedo(distr_, wi, 1.f / eta_, InterfaceLobe::Reflection) * mu;
-        }
-        internal_reflectance_ = float(2.0 * internal / AlbedoRes);
+            internal[i] = rough_interface_albedo(distr_, wi, 1.f / eta_, InterfaceLobe::Reflection) * mu;
+        });
+        double sum = 0.0;
+        for (const float v : internal) sum += v;
+        internal_reflectance_ = float(2.0 * sum / AlbedoRes);
         flags_ = BSDFGlossyReflection | BSDFDiffuseReflection;
     }
 
