@@ -54,8 +54,8 @@ template <typename T> struct MicrofacetDistribution {
     T alpha_u = T(0.1f), alpha_v = T(0.1f);
     bool sample_visible = true;
 
-    // The roughnesses in use: clamped to at least 1e-4 as Mitsuba's MicrofacetDistribution::configure() does (a
-    // zero roughness, e.g. from a texture, behaves as a very smooth surface instead of dividing by zero).
+    // The roughnesses in use: clamped to at least 1e-4 as Mitsuba's MicrofacetDistribution::configure() does
+    // (a zero roughness, e.g. from a texture, behaves as a very smooth surface instead of dividing by zero).
     T au() const { return alpha_u < T(MinAlpha) ? T(MinAlpha) : alpha_u; }
     T av() const { return alpha_v < T(MinAlpha) ? T(MinAlpha) : alpha_v; }
     static constexpr float MinAlpha = 1e-4f;

@@ -1,7 +1,7 @@
 // Rough plastic: a rough dielectric coating (isotropic microfacets) over a diffuse base:
 //   f cos_o = s F(wi.h) D G / (4 cos_i) + R' T(cos_i) T(cos_o) cos_o / (pi eta^2),
-// where T(mu) is the rough coating's directional transmittance seen from outside (light refracted in, masked by
-// G1 of the refracted direction; not 1 - reflectance), R' = R / (1 - Fdr_int) (or R / (1 - R Fdr_int) if
+// where T(mu) is the rough coating's directional transmittance seen from outside (light refracted in, masked
+// by G1 of the refracted direction; not 1 - reflectance), R' = R / (1 - Fdr_int) (or R / (1 - R Fdr_int) if
 // nonlinear) and Fdr_int = 2 int E_int(mu) mu dmu is the internal albedo, E_int the reflectance from inside.
 // Both are tabulated at load time as Mitsuba does (64 entries mu_i = max(1e-6, i / 63); Fdr_int = 2 mean_i
 // E_int(mu_i) mu_i; Gauss-Legendre quadrature over visible normals, core/microfacet.h).
@@ -48,11 +48,13 @@ public:
         tbb::parallel_for(0, AlbedoRes, [&](int i) {
             const float mu = std::max(1e-6f, float(i) / (AlbedoRes - 1));
             const Vec3f wi(std::sqrt(1.f - mu * mu), 0.f, mu);
-            external_transmittance_[i] = rough_interface_albedo(distr_, wi, eta_, InterfaceLobe::Transmission);
+            external_transmittance_[i] =
+                rough_interface_albedo(distr_, wi, eta_, InterfaceLobe::Transmission);
             internal[i] = rough_interface_albedo(distr_, wi, 1.f / eta_, InterfaceLobe::Reflection) * mu;
         });
         double sum = 0.0;
-        for (const float v : internal) sum += v;
+        for (const float v : internal)
+            sum += v;
         internal_reflectance_ = float(2.0 * sum / AlbedoRes);
         flags_ = BSDFGlossyReflection | BSDFDiffuseReflection;
     }
