@@ -204,6 +204,7 @@ class PrincipledBSDF final : public BSDFBase<PrincipledBSDF> {
         p.clearcoat = front ? T(0.25f * p_.clearcoat_rate) * p_.clearcoat->eval_1(si) : T(0);
         p.diffuse = front ? (T(1) - metallic) * (T(1) - spec_trans) * T(p_.diffuse_rate) : T(0);
         const T total = p.spec_reflect + p.spec_trans + p.clearcoat + p.diffuse;
+        if (!(total > T(0))) return {T(0), T(0), T(0), T(0)}; // all sampling rates 0: nothing is sampled
         return {p.diffuse / total, p.clearcoat / total, p.spec_trans / total, p.spec_reflect / total};
     }
     // Relative IOR: `eta`, or from `specular` = 12.5 R0 (Burley 2012 §B.2): eta = 2 / (1 − sqrt(0.08

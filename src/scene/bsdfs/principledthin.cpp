@@ -165,6 +165,7 @@ class PrincipledThinBSDF final : public BSDFBase<PrincipledThinBSDF> {
         p.diffuse_reflect = T(p_.diffuse_reflect_rate) * (T(1) - spec_trans) * (T(1) - diff_trans);
         p.diffuse_trans = T(p_.diffuse_trans_rate) * (T(1) - spec_trans) * diff_trans;
         const T total = p.spec_reflect + p.spec_trans + p.diffuse_reflect + p.diffuse_trans;
+        if (!(total > T(0))) return {T(0), T(0), T(0), T(0)}; // all sampling rates 0: nothing is sampled
         return {p.spec_reflect / total, p.spec_trans / total, p.diffuse_reflect / total,
                 p.diffuse_trans / total};
     }
