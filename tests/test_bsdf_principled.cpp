@@ -462,6 +462,45 @@ TEST(Principled, LoaderAcceptsMitsubasParametersAndRejectsBadOnes) {
     EXPECT_NE(unknown.find("metallic"), std::string::npos) << unknown;
 }
 
+// Mitsuba's IOR conventions: specular = 0.5 is eta = 1.5 (eta = 2 / (1 − sqrt(0.08 specular)) − 1), and with
+// spec_trans given, eta = 1 becomes 1.001 and specular = 0 becomes 1e-3 (an index-matched interface cannot
+// transmit).
+TEST(Principled, SpecularMapsToEtaAsInMitsuba) {
+    PrincipledParams p;
+    p.spec_trans = tex(0.7f);
+    p.has_spec_trans = true;
+    p.specular = 0.5f;
+    const BSDFPtr by_specular = make_principled(p);
+    p.eta_given = true;
+    p.eta = 1.5f;
+    const BSDFPtr by_eta = make_principled(p);
+    for (const auto& d : kPairs)
+        for (float side : {1.f, -1.f}) {
+            const Vec3f wi = normalize(d.wi) * side, wo = normalize(d.wo);
+            expect_color_near(eval_at(*by_specular, wi, wo), eval_at(*by_eta, wi, wo),
+                              "specular 0.5 vs eta 1.5");
+            const Vec3f wt(wo.x, wo.y, -wo.z);
+            expect_color_near(eval_at(*by_specular, wi, wt), eval_at(*by_eta, wi, wt), "transmission");
+        }
+    const auto value_of = [](const std::string& xml, const std::string& name) {
+        auto scene = load_scene_string(xml);
+        Parameters params(*scene);
+        return *params.find(name).data;
+    };
+    const std::string st = R"(<float name="spec_trans" value="0.5"/>)";
+    EXPECT_EQ(value_of(bsdf_scene(R"(<bsdf type="principled" id="mat"><float name="eta" value="1"/>)" + st +
+                                  "</bsdf>"),
+                       "mat.eta"),
+              1.001f);
+    EXPECT_EQ(value_of(bsdf_scene(R"(<bsdf type="principled" id="mat"><float name="specular" value="0"/>)" +
+                                  st + "</bsdf>"),
+                       "mat.specular"),
+              1e-3f);
+    EXPECT_EQ(value_of(bsdf_scene(R"(<bsdf type="principled" id="mat"><float name="eta" value="1"/></bsdf>)"),
+                       "mat.eta"),
+              1.f);
+}
+
 // Mitsuba BSDFs left out on purpose name themselves and the reason, on one line.
 TEST(Principled, OutOfScopeBSDFsSayWhy) {
     for (const char* type : {"polarizer", "retarder", "circular", "pplastic", "measured_polarized"}) {
