@@ -8,6 +8,7 @@
 #include "core/vector.h"
 #include "scene/properties.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace penumbra::principled {
