@@ -393,6 +393,78 @@ TEST(Principled, ThinLobesMatchTheirFormulas) {
 }
 
 namespace {
+// pdf and eval (first channel) along wo = (sin θ, 0, cos θ), θ = i/19 · π/2, for wi = (1, 0, 1) (not
+// normalized), as Mitsuba 3's own regression tests pin them (src/bsdfs/tests/test_principled.py and
+// test_principledthin.py, test05_eval_pdf / test03_eval_pdf_thin, scalar_rgb).
+void expect_mitsuba_values(const BSDF& bsdf, const double (&pdf_true)[20], const double (&eval_true)[20]) {
+    SurfaceInteraction3f si;
+    si.wi = Vec3f(1.f, 0.f, 1.f);
+    for (int i = 0; i < 20; ++i) {
+        const double theta = i / 19.0 * (std::acos(-1.0) / 2.0); // in double, as in the Python test
+        const Vec3f wo(float(std::sin(theta)), 0.f, float(std::cos(theta)));
+        // Mitsuba's own criterion (dr.allclose: relative 1e-5, absolute 1e-8).
+        EXPECT_NEAR(bsdf.pdf(BSDFContext(), si, wo), pdf_true[i], 1e-5 * pdf_true[i] + 1e-8)
+            << "pdf, i = " << i;
+        EXPECT_NEAR(bsdf.eval(BSDFContext(), si, wo).x, eval_true[i], 1e-5 * eval_true[i] + 1e-8)
+            << "eval, i = " << i;
+    }
+}
+} // namespace
+
+TEST(Principled, EvalAndPdfMatchMitsubasRegressionValues) {
+    PrincipledParams p;
+    p.metallic = tex(0.3f);
+    p.spec_tint = tex(0.6f);
+    p.specular = 0.4f;
+    p.anisotropic = tex(0.3f);
+    p.clearcoat = tex(0.3f);
+    p.clearcoat_gloss = tex(0.5f);
+    p.sheen = tex(0.9f);
+    p.sheen_tint = tex(0.9f);
+    p.spec_trans = tex(0.5f);
+    p.has_spec_trans = true;
+    p.flatness = tex(0.5f);
+    const double pdf_true[20] = {
+        0.17007458209991455,  0.15398569405078888,  0.14061447978019714,  0.12924496829509735,
+        0.1193309798836708,   0.1104581207036972,   0.10231398791074753,  0.09466464817523956,
+        0.08733665198087692,  0.08020336925983429,  0.07317451387643814,  0.06618815660476685,
+        0.0592045858502388,   0.052201706916093826, 0.045171335339546204, 0.03811638057231903,
+        0.031048627570271492, 0.02398696169257164,  0.016955917701125145, 0.009984553791582584};
+    const double eval_true[20] = {
+        0.06804995983839035,  0.06425636261701584,  0.060901228338479996, 0.057847555726766586,
+        0.05498623475432396,  0.05223095044493675,  0.049513764679431915, 0.04678140580654144,
+        0.04399249702692032,  0.04111534729599953,  0.03812596574425697,  0.03500543162226677,
+        0.031735487282276154, 0.02829158864915371,  0.024633212015032768, 0.02069348469376564,
+        0.01637275144457817,  0.011544802226126194, 0.006091561634093523, 4.703659982886835e-18};
+    expect_mitsuba_values(*make_principled(p), pdf_true, eval_true);
+}
+
+TEST(Principled, ThinEvalAndPdfMatchMitsubasRegressionValues) {
+    PrincipledThinParams t;
+    t.eta = tex(1.5f);
+    t.anisotropic = tex(0.5f);
+    t.sheen = tex(0.5f);
+    t.sheen_tint = tex(0.2f);
+    t.spec_trans = tex(0.5f);
+    t.has_spec_trans = true;
+    t.flatness = tex(0.5f);
+    t.diff_trans = tex(0.6f);
+    const double pdf_true[20] = {
+        0.18230389058589935, 0.17071931064128876,  0.1604636013507843,  0.15113641321659088,
+        0.1424213945865631,  0.13407252728939056,  0.1259022206068039,  0.1177704930305481,
+        0.10957615822553635, 0.1012495756149292,   0.09274674206972122, 0.0840444564819336,
+        0.07513649761676788, 0.06603056192398071,  0.05674567073583603, 0.04731012135744095,
+        0.03775978833436966, 0.028136683627963066, 0.01848774217069149, 0.008863822557032108};
+    const double eval_true[20] = {
+        0.04944333806633949,  0.04872140288352966,  0.047846242785453796, 0.0468028225004673,
+        0.04557877406477928,  0.04416417330503464,  0.042551249265670776, 0.04073421657085419,
+        0.03870923072099686,  0.036474503576755524, 0.03403010591864586,  0.0313769206404686,
+        0.028513599187135696, 0.025431113317608833, 0.02210502326488495,  0.01848825439810753,
+        0.014510626904666424, 0.01009628176689148,  0.005216196645051241, 3.899415020768372e-18};
+    expect_mitsuba_values(*make_principledthin(t), pdf_true, eval_true);
+}
+
+namespace {
 std::string bsdf_scene(const std::string& bsdf) {
     return R"(<scene version="3.0.0"><shape type="rectangle" id="plane">)" + bsdf + R"(</shape></scene>)";
 }

@@ -80,12 +80,18 @@ template <typename T> T clearcoat_alpha(const T& gloss) {
     return T(0.1f) * (T(1) - gloss) + T(0.001f) * gloss;
 }
 
-// Clearcoat masking: separable Smith GGX with the fixed α = 0.25 (Burley 2012 §B.1).
+// Clearcoat masking: separable Smith GGX with the fixed α = 0.25, in terms of cos θ alone as in Burley 2012
+// (§B.1) and Mitsuba: G1(v) = 2 / (1 + sqrt(1 + α² (1 − cos²θ) / cos²θ)), 0 where v sees the back of m.
+template <typename T> T clearcoat_G1(const Vec3<T>& v, const Vec3<T>& m) {
+    using std::abs;
+    using std::sqrt;
+    if (!(dot(v, m) * v.z > T(0))) return T(0);
+    const T c2 = sqr(abs(v.z));
+    if (c2 == T(1)) return T(1);
+    return T(2) / (T(1) + sqrt(T(1) + T(0.0625f) * (T(1) - c2) / c2));
+}
 template <typename T> T clearcoat_G(const Vec3<T>& wi, const Vec3<T>& wo, const Vec3<T>& m) {
-    MicrofacetDistribution<T> d;
-    d.type = MicrofacetType::GGX;
-    d.alpha_u = d.alpha_v = T(0.25f);
-    return d.G(wi, wo, m);
+    return clearcoat_G1(wi, m) * clearcoat_G1(wo, m);
 }
 
 // Whether microfacet m (flipped to wi's side of the macro surface) is seen by wi and by wo on the same side
