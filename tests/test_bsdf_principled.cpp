@@ -65,6 +65,17 @@ std::vector<Case> cases() {
     p.clearcoat_rate = 3.f;
     p.diffuse_rate = 2.f;
     out.push_back({"principled_all_lobes_sampling_rates", make_principled(p), kOblique});
+    // Mitsuba's test04_chi2_spec_trans_less_dense: eta < 1 (total internal reflection from outside).
+    p = PrincipledParams();
+    p.roughness = tex(0.8f);
+    p.metallic = tex(0.2f);
+    p.clearcoat = tex(1.f);
+    p.spec_trans = tex(0.5f);
+    p.has_spec_trans = true;
+    p.eta_given = true;
+    p.eta = 0.5f;
+    out.push_back({"principled_eta_below_one", make_principled(p), normalize(Vec3f(1.f, 0.f, 1.f))});
+    out.push_back({"principled_eta_below_one_inside", make_principled(p), kInside});
     PrincipledThinParams t;
     t.base_color = tex(Color3f(0.7f, 0.4f, 0.2f));
     t.spec_trans = tex(0.6f);
