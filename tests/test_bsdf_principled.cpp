@@ -317,7 +317,7 @@ TEST(Principled, SpecTransIsARoughDielectric) {
     EXPECT_GT(nonzero, 400);
 }
 
-// The diffuse lobe against Burley 2012 (§5.3 and the BRDF explorer's disney.brdf), with F = 0 (specular = 0
+// The diffuse lobe against Burley 2012 (and the BRDF explorer's disney.brdf), with F = 0 (specular = 0
 // gives eta = 1): base/π (1 + (F_D90 − 1) F_i)(1 + (F_D90 − 1) F_o), F_D90 = 0.5 + 2 roughness cos²θ_d;
 // flatness = 1: base/π 1.25 (F_ss (1 / (cos_i + cos_o) − 0.5) + 0.5), F_ss90 = roughness cos²θ_d; sheen with
 // a black base: sheen (1 − cos θ_d)^5. Each times cos_o.

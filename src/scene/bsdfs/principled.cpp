@@ -1,33 +1,32 @@
-// The Disney principled BSDF as Mitsuba 3 implements it (Burley 2012, 2015). With brdf = (1 − metallic)(1 −
-// spec_trans), bsdf = (1 − metallic) spec_trans, GGX alphas from roughness/anisotropic and h the
+// The Disney principled BSDF as Mitsuba 3 implements it (Burley 2012, 2015). With brdf = (1 − metallic)
+// (1 − spec_trans), bsdf = (1 − metallic) spec_trans, GGX alphas from roughness/anisotropic and h the
 // (generalized) half vector:
-//   specular reflection:   F_p D G / (4 |cos_i|),  F_p = (1−metallic)(1−spec_tint) F + metallic
-//   Schlick(base_color)
-//                          + (1−metallic) spec_tint Schlick(tint R0(eta)) on the front side, bsdf F on the
-//                          back
-//   specular transmission: sqrt(base_color) bsdf |s (1−F) D G η² (wi·h)(wo·h) / (cos_i (wi·h + η wo·h)²)|
+//   specular reflection:   F_p D G / (4 |cos_i|); on the front side F_p = (1 − metallic)(1 − spec_tint) F
+//                          + metallic Schlick(base_color) + (1 − metallic) spec_tint Schlick(tint R0(eta)),
+//                          on the back side F_p = bsdf F
+//   specular transmission: sqrt(base_color) bsdf |s (1 − F) D G η² (wi·h)(wo·h) / (cos_i (wi·h + η wo·h)²)|
 //   clearcoat (front):     clearcoat/4 Schlick(0.04) GTR1(h) G_0.25 |cos_o|
-//   diffuse (front):       brdf base_color/π diffuse_shape |cos_o| + (1−metallic) sheen |cos_o|
+//   diffuse (front):       brdf base_color/π diffuse_shape |cos_o| + (1 − metallic) sheen |cos_o|
 // F is the dielectric Fresnel of eta; s = 1/η² in radiance mode. Lobes are chosen with Mitsuba's
 // probabilities (diffuse brdf, clearcoat clearcoat/4, specular reflection 1 − bsdf (1 − F), transmission
-// bsdf (1 − F), each times its sampling rate, normalized); the specular normal is drawn from the visible GGX
-// normals.
+// bsdf (1 − F), each times its sampling rate, normalized); the specular normal is drawn from the visible
+// GGX normals.
 //
 // Mitsuba 3 parameters (src/bsdfs/principled.cpp):
-//   base_color                          spectrum|texture   0.5    base color
-//   roughness                           float|texture      0.5    main specular roughness (α = roughness²)
-//   anisotropic                         float|texture      0.0    degree of anisotropy
-//   metallic                            float|texture      0.0    metallicness
-//   spec_trans                          float|texture      0.0    blend of the BRDF (0) and BSDF (1) lobes
-//   eta                                 float              –      relative IOR (instead of `specular`)
-//   specular                            float              0.5    Fresnel at normal incidence: eta = 2 / (1 −
-//   sqrt(0.08 specular)) − 1 spec_tint                           float|texture      0.0    base_color tint of
-//   the dielectric reflection sheen, sheen_tint                   float|texture      0.0    sheen lobe and
-//   its base_color tint flatness                            float|texture      0.0    diffuse (0) to fake
-//   subsurface (1) clearcoat, clearcoat_gloss          float|texture      0.0    clearcoat lobe and its
-//   glossiness main_specular_sampling_rate         float              1.0    relative sampling rates of the
-//   lobes clearcoat_sampling_rate             float              1.0 diffuse_reflectance_sampling_rate float
-//   1.0
+//   base_color                         spectrum|texture  0.5  base color
+//   roughness                          float|texture     0.5  specular roughness (α = roughness²)
+//   anisotropic                        float|texture     0.0  degree of anisotropy
+//   metallic                           float|texture     0.0  metallicness
+//   spec_trans                         float|texture     0.0  blend of the BRDF (0) and BSDF (1) lobes
+//   eta                                float             –    relative IOR (instead of `specular`)
+//   specular                           float             0.5  eta = 2 / (1 − sqrt(0.08 specular)) − 1
+//   spec_tint                          float|texture     0.0  base_color tint of the dielectric reflection
+//   sheen, sheen_tint                  float|texture     0.0  sheen lobe and its base_color tint
+//   flatness                           float|texture     0.0  diffuse (0) to fake subsurface (1)
+//   clearcoat, clearcoat_gloss         float|texture     0.0  clearcoat lobe and its glossiness
+//   main_specular_sampling_rate        float             1.0  relative sampling rate of the specular lobes
+//   clearcoat_sampling_rate            float             1.0  ... of the clearcoat
+//   diffuse_reflectance_sampling_rate  float             1.0  ... of the diffuse lobe
 #include "core/fresnel.h"
 #include "core/param.h"
 #include "core/warp.h"
@@ -207,7 +206,7 @@ class PrincipledBSDF final : public BSDFBase<PrincipledBSDF> {
         if (!(total > T(0))) return {T(0), T(0), T(0), T(0)}; // all sampling rates 0: nothing is sampled
         return {p.diffuse / total, p.clearcoat / total, p.spec_trans / total, p.spec_reflect / total};
     }
-    // Relative IOR: `eta`, or from `specular` = 12.5 R0 (Burley 2012 §B.2): eta = 2 / (1 − sqrt(0.08
+    // Relative IOR: `eta`, or from `specular` = 12.5 R0 (Burley 2012): eta = 2 / (1 − sqrt(0.08
     // specular)) − 1.
     template <typename T> T eta_value() const {
         using std::sqrt;

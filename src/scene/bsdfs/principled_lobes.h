@@ -42,7 +42,7 @@ template <typename T> Color3<T> sqrt_color(const Color3<T>& c) {
     return {safe_sqrt(c.x), safe_sqrt(c.y), safe_sqrt(c.z)};
 }
 
-// Disney roughness to GGX alphas (Burley 2012 §B.2): α = roughness², stretched by aspect = sqrt(1 − 0.9
+// Disney roughness to GGX alphas (Burley 2012): α = roughness², stretched by aspect = sqrt(1 − 0.9
 // anisotropic) into α_u = α / aspect, α_v = α · aspect; each at least 0.001.
 template <typename T>
 MicrofacetDistribution<T> specular_distribution(const T& roughness, const T& anisotropic) {
@@ -56,7 +56,7 @@ MicrofacetDistribution<T> specular_distribution(const T& roughness, const T& ani
     return d;
 }
 
-// GTR1 (Berry) distribution of the clearcoat (Burley 2012 §B.1): D(m) = (α² − 1) / (π log(α²) (1 + (α² − 1)
+// GTR1 (Berry) distribution of the clearcoat (Burley 2012): D(m) = (α² − 1) / (π log(α²) (1 + (α² − 1)
 // cos²θ_m)), sampled proportionally to D(m) cos θ_m; α = lerp(0.1, 0.001, clearcoat_gloss).
 template <typename T> struct GTR1 {
     T alpha;
@@ -81,7 +81,7 @@ template <typename T> T clearcoat_alpha(const T& gloss) {
 }
 
 // Clearcoat masking: separable Smith GGX with the fixed α = 0.25, in terms of cos θ alone as in Burley 2012
-// (§B.1) and Mitsuba: G1(v) = 2 / (1 + sqrt(1 + α² (1 − cos²θ) / cos²θ)), 0 where v sees the back of m.
+// and Mitsuba: G1(v) = 2 / (1 + sqrt(1 + α² (1 − cos²θ) / cos²θ)), 0 where v sees the back of m.
 template <typename T> T clearcoat_G1(const Vec3<T>& v, const Vec3<T>& m) {
     using std::abs;
     using std::sqrt;
@@ -102,7 +102,7 @@ bool microfacet_compatible(const Vec3<T>& m, const Vec3<T>& wi, const Vec3<T>& w
     return dot(wi, ms) > T(0) && (reflection ? dot(wo, ms) > T(0) : dot(wo, ms) < T(0));
 }
 
-// The diffuse lobe's shape without base_color / π (Burley 2012 §5.3 and 2015 §3 in Mitsuba's form): the
+// The diffuse lobe's shape without base_color / π (Burley 2012 and 2015, in Mitsuba's form): the
 // Schlick-shaped diffuse (1 − F_i/2)(1 − F_o/2) plus retro-reflection R_r (F_o + F_i + F_o F_i (R_r − 1)),
 // R_r = 2 roughness cos²θ_d, blended by `flatness` with the Hanrahan-Krueger-like fake subsurface
 // 1.25 (F_ss (1 / (cos_i + cos_o) − 0.5) + 0.5), F_ss = lerp(1, R_r/2, F_o) lerp(1, R_r/2, F_i).
@@ -118,7 +118,7 @@ T diffuse_shape(const T& cos_i, const T& cos_o, const T& cos_d, const T& roughne
     return (T(1) - flatness) * (f_diff + f_retro) + flatness * f_ss;
 }
 
-// Sheen (Burley 2012 §5.3): sheen · lerp(1, tint, sheen_tint) · (1 − cos θ_d)^5, without the cosine.
+// Sheen (Burley 2012): sheen · lerp(1, tint, sheen_tint) · (1 − cos θ_d)^5, without the cosine.
 template <typename T>
 Color3<T> sheen_value(const T& sheen, const T& sheen_tint, const Color3<T>& base, const T& cos_d) {
     using std::abs;

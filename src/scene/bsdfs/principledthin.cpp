@@ -1,4 +1,4 @@
-// The thin principled BSDF as Mitsuba 3 implements it (Burley 2015 §4): a two-sided sheet without refraction.
+// The thin principled BSDF as Mitsuba 3 implements it (Burley 2015): a two-sided sheet without refraction.
 // Directions are mirrored to the side of wi (the model is symmetric); with wo' = wo mirrored to the upper
 // hemisphere, h = normalize(wi + wo'), d = diff_trans / 2 and the GGX alphas from roughness/anisotropic:
 //   specular reflection:   spec_trans F_t D G / (4 cos_i),  F_t = lerp(F, Schlick(tint R0(eta)), spec_tint)
@@ -10,18 +10,19 @@
 // (1 − spec_trans)(1 − d), (1 − spec_trans) d, each times its sampling rate, normalized.
 //
 // Mitsuba 3 parameters (src/bsdfs/principledthin.cpp):
-//   base_color                            spectrum|texture   0.5    base color
-//   roughness                             float|texture      0.5    specular roughness (α = roughness²)
-//   anisotropic                           float|texture      0.0    degree of anisotropy
-//   spec_trans                            float|texture      0.0    diffuse (0) to specular (1) response
-//   eta                                   float|texture      1.5    relative IOR of the sheet
-//   spec_tint                             float|texture      0.0    base_color tint of the dielectric
-//   reflection sheen, sheen_tint                     float|texture      0.0    sheen lobe and its base_color
-//   tint flatness                              float|texture      0.0    diffuse (0) to fake subsurface (1)
-//   diff_trans                            float|texture      0.0    diffuse energy given to transmission (0
-//   .. 2) specular_reflectance_sampling_rate    float              1.0    relative sampling rates of the
-//   lobes specular_transmittance_sampling_rate  float              1.0 diffuse_reflectance_sampling_rate
-//   float              1.0 diffuse_transmittance_sampling_rate   float              1.0
+//   base_color                            spectrum|texture  0.5  base color
+//   roughness                             float|texture     0.5  specular roughness (α = roughness²)
+//   anisotropic                           float|texture     0.0  degree of anisotropy
+//   spec_trans                            float|texture     0.0  diffuse (0) to specular (1) response
+//   eta                                   float|texture     1.5  relative IOR of the sheet
+//   spec_tint                             float|texture     0.0  base_color tint of the reflection
+//   sheen, sheen_tint                     float|texture     0.0  sheen lobe and its base_color tint
+//   flatness                              float|texture     0.0  diffuse (0) to fake subsurface (1)
+//   diff_trans                            float|texture     0.0  diffuse energy sent through (0 .. 2)
+//   specular_reflectance_sampling_rate    float             1.0  relative sampling rates of the lobes
+//   specular_transmittance_sampling_rate  float             1.0
+//   diffuse_reflectance_sampling_rate     float             1.0
+//   diffuse_transmittance_sampling_rate   float             1.0
 #include "core/fresnel.h"
 #include "core/warp.h"
 #include "scene/bsdfs/bsdfs.h"
