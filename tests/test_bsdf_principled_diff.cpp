@@ -75,6 +75,12 @@ TEST(PrincipledDerivative, Metallic) {
 TEST(PrincipledDerivative, Specular) {
     expect_matches_fd(diff_scene(kPrincipledPlane), {"mat.specular"}, 1e-2);
 }
+TEST(PrincipledDerivative, EtaOfATransmissiveMaterial) {
+    expect_matches_fd(
+        diff_scene(R"(<bsdf type="principled" id="mat"><rgb name="base_color" value="0.7,0.5,0.3"/>
+        <float name="roughness" value="0.3"/><float name="eta" value="1.4"/><float name="spec_trans" value="0.6"/></bsdf>)"),
+        {"mat.eta"}, 1e-2);
+}
 // The roughness of a purely specular sheet. (In the mixed sheet, the specular and retro-reflection parts of
 // ∂/∂roughness partly cancel and the image is mostly noise: at 16 spp 2-5% of its 2 × 2 blocks fall beyond
 // the 16-batch 4σ, 1% at 64 spp, with |z| < 3 of both signs over seeds: heavy tails, not a bias.)
