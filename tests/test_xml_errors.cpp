@@ -192,8 +192,10 @@ TEST(XmlErrors, InvalidTransforms) {
 TEST(XmlErrors, LoaderRejectsWhatPenumbraCannotRender) {
     const auto load_error = [](const std::string& xml) { return error_of([&] { load_scene_string(xml); }); };
     // Unsupported plugin: exactly one line at the declaration.
-    EXPECT_EQ(load_error(scene("<shape type=\"cube\">\n  <bsdf type=\"hair\"/>\n</shape>")),
-              "<string>:3: unsupported bsdf plugin 'hair'");
+    EXPECT_EQ(
+        load_error(scene("<shape type=\"cube\">\n  <bsdf type=\"hair\"/>\n</shape>")),
+        "<string>:3: unsupported bsdf plugin 'hair': it is meant for curve shapes, which penumbra does not "
+        "have");
     // A parameter the plugin does not know.
     const std::string unknown =
         load_error(scene("<bsdf type=\"diffuse\">\n<float name=\"roughness\" value=\"1\"/></bsdf>"));

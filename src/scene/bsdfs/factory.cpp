@@ -36,6 +36,21 @@ float named_ior(const Properties& props, const std::string& param, std::string n
     props.raise(param, "unknown IOR \"" + name + "\" (expected a float or one of: " + choices + ")");
 }
 
+// Mitsuba BSDFs that penumbra leaves out on purpose, and why.
+const std::map<std::string, std::string>& out_of_scope_bsdfs() {
+    static const std::string polarized =
+        "polarized BSDFs are out of scope: penumbra is an RGB, unpolarized renderer";
+    static const std::map<std::string, std::string> reasons = {
+        {"polarizer", polarized},
+        {"retarder", polarized},
+        {"circular", polarized},
+        {"pplastic", polarized},
+        {"measured_polarized", polarized},
+        {"measured", "tabulated measured BRDFs (RGL .bsdf files) are not implemented"},
+        {"hair", "it is meant for curve shapes, which penumbra does not have"}};
+    return reasons;
+}
+
 } // namespace
 
 float lookup_ior(const Properties& props, const std::string& name, const std::string& default_name) {
@@ -133,11 +148,15 @@ std::shared_ptr<Object> make_bsdf(const Properties& props, const LoadContext&) {
                                                           {"twosided", load_twosided},
                                                           {"mask", load_mask},
                                                           {"null", load_null_bsdf},
+                                                          {"principled", load_principled},
+                                                          {"principledthin", load_principledthin},
                                                           {"normalmap", load_normalmap},
                                                           {"bumpmap", load_bumpmap}};
     const auto it = loaders.find(props.plugin());
-    if (it == loaders.end()) throw_unsupported_plugin(props, ObjectKind::BSDF);
-    return it->second(props);
+    if (it != loaders.end()) return it->second(props);
+    const auto why = out_of_scope_bsdfs().find(props.plugin());
+    if (why == out_of_scope_bsdfs().end()) throw_unsupported_plugin(props, ObjectKind::BSDF);
+    throw LoadError(props.location(), "unsupported bsdf plugin '" + props.plugin() + "': " + why->second);
 }
 
 } // namespace penumbra
