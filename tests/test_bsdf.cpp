@@ -59,6 +59,10 @@ std::vector<Case> smooth_cases() {
                                                  make_diffuse(tex(0.8f))), oblique},
         {"mask_roughconductor", make_mask(tex(0.7f), mirror_conductor(rough(Beckmann, 0.3f, 0.3f))), oblique},
         {"twosided_back", make_twosided(mirror_conductor(rough(GGX, 0.3f, 0.3f)), make_diffuse(tex(0.5f))), inside},
+        // A normal tilted ~35 degrees (samples leaving the original hemisphere are rejected, as Mitsuba does).
+        {"normalmap_roughconductor_aniso",
+         make_normalmap(tex(Color3f(0.8f, 0.4f, 0.9f)), mirror_conductor(rough(GGX, 0.2f, 0.5f))), oblique},
+        {"normalmap_diffuse", make_normalmap(tex(Color3f(0.2f, 0.6f, 0.9f)), make_diffuse(tex(0.5f))), oblique},
     };
 }
 

@@ -28,7 +28,7 @@ void PrintTo(const DocScene& scene, std::ostream* os) { *os << scene.file; }
 // unsupported.
 const DocScene kScenes[] = {
     {"bsdf_blendbsdf.xml", "", ""},
-    {"bsdf_bumpmap_with.xml", "bsdf", "bumpmap"},
+    {"bsdf_bumpmap_with.xml", "", ""},
     {"bsdf_bumpmap_without.xml", "", ""},
     {"bsdf_conductor_aluminium.xml", "", ""},
     {"bsdf_conductor_gold.xml", "", ""},
@@ -44,7 +44,7 @@ const DocScene kScenes[] = {
     {"bsdf_measured_polarized_fakegold_stokes.xml", "bsdf", "measured_polarized"},
     {"bsdf_measured_polarized_gold.xml", "bsdf", "measured_polarized"},
     {"bsdf_measured_polarized_gold_stokes.xml", "bsdf", "measured_polarized"},
-    {"bsdf_normalmap_with.xml", "bsdf", "normalmap"},
+    {"bsdf_normalmap_with.xml", "", ""},
     {"bsdf_normalmap_without.xml", "", ""},
     {"bsdf_plastic_default.xml", "", ""},
     {"bsdf_plastic_diffuse.xml", "", ""},

@@ -3,6 +3,8 @@
 // CDF (Mitsuba 3's scheme). D, G1, G and pdf are templated on the scalar type; sampling is float only.
 #pragma once
 #include "core/frame.h"
+#include "core/fresnel.h"
+#include "core/quadrature.h"
 
 #include <algorithm>
 #include <cmath>
@@ -52,6 +54,12 @@ template <typename T> struct MicrofacetDistribution {
     T alpha_u = T(0.1f), alpha_v = T(0.1f);
     bool sample_visible = true;
 
+    // The roughnesses in use: clamped to at least 1e-4 as Mitsuba's MicrofacetDistribution::configure() does
+    // (a zero roughness, e.g. from a texture, behaves as a very smooth surface instead of dividing by zero).
+    T au() const { return alpha_u < T(MinAlpha) ? T(MinAlpha) : alpha_u; }
+    T av() const { return alpha_v < T(MinAlpha) ? T(MinAlpha) : alpha_v; }
+    static constexpr float MinAlpha = 1e-4f;
+
     // Normal distribution D(m) for m in the upper hemisphere, normalized so that int D(m) cos(theta_m) dm = 1:
     //   Beckmann: exp(-(m_x^2/au^2 + m_y^2/av^2) / m_z^2) / (pi au av m_z^4)
     //   GGX:      1 / (pi au av (m_x^2/au^2 + m_y^2/av^2 + m_z^2)^2)
@@ -59,9 +67,9 @@ template <typename T> struct MicrofacetDistribution {
         using std::exp;
         if (!(m.z > T(0))) return T(0);
         const T c2 = m.z * m.z;
-        const T r = sqr(m.x / alpha_u) + sqr(m.y / alpha_v);
-        if (type == MicrofacetType::Beckmann) return exp(-r / c2) / (T(Pi) * alpha_u * alpha_v * c2 * c2);
-        return T(1) / (T(Pi) * alpha_u * alpha_v * sqr(r + c2));
+        const T r = sqr(m.x / au()) + sqr(m.y / av());
+        if (type == MicrofacetType::Beckmann) return exp(-r / c2) / (T(Pi) * au() * av() * c2 * c2);
+        return T(1) / (T(Pi) * au() * av() * sqr(r + c2));
     }
 
     // Smith's monodirectional masking G1(v, m) (zero when v sees the back of m):
@@ -69,7 +77,7 @@ template <typename T> struct MicrofacetDistribution {
     T G1(const Vec3<T>& v, const Vec3<T>& m) const {
         using std::sqrt;
         if (!(dot(v, m) * v.z > T(0))) return T(0);
-        const T xy = sqr(alpha_u * v.x) + sqr(alpha_v * v.y);
+        const T xy = sqr(au() * v.x) + sqr(av() * v.y);
         if (xy == T(0)) return T(1);
         const T tan2 = xy / (v.z * v.z);
         if (type == MicrofacetType::Beckmann) {
@@ -95,7 +103,7 @@ template <typename T> struct MicrofacetDistribution {
     Vec3<T> sample(const Vec3<T>& wi, const Vec2f& u) const {
         if (!sample_visible) return sample_all(u);
         // Stretch to the configuration alpha = 1, sample the visible slopes there, unstretch.
-        const Vec3f wi_s = normalize(Vec3f(alpha_u * wi.x, alpha_v * wi.y, wi.z));
+        const Vec3f wi_s = normalize(Vec3f(au() * wi.x, av() * wi.y, wi.z));
         if (type == MicrofacetType::GGX) {
             // Heitz 2018, "Sampling the GGX Distribution of Visible Normals": uniform point on the projected
             // hemisphere seen from wi_s.
@@ -108,7 +116,7 @@ template <typename T> struct MicrofacetDistribution {
             const float s = 0.5f * (1.f + wi_s.z);
             p2 = (1.f - s) * std::sqrt(std::max(0.f, 1.f - p1 * p1)) + s * p2;
             const Vec3f nh = t1 * p1 + t2 * p2 + wi_s * std::sqrt(std::max(0.f, 1.f - p1 * p1 - p2 * p2));
-            return normalize(Vec3f(alpha_u * nh.x, alpha_v * nh.y, std::max(1e-7f, nh.z)));
+            return normalize(Vec3f(au() * nh.x, av() * nh.y, std::max(1e-7f, nh.z)));
         }
         const float sin_phi_len = std::sqrt(wi_s.x * wi_s.x + wi_s.y * wi_s.y);
         const float cos_phi = sin_phi_len > 0.f ? wi_s.x / sin_phi_len : 1.f;
@@ -116,16 +124,16 @@ template <typename T> struct MicrofacetDistribution {
         Vec2f slope = beckmann_visible_slopes_11(wi_s.z, u);
         // Rotate from the incidence plane back to the local frame and unstretch.
         slope = Vec2f(cos_phi * slope.x - sin_phi * slope.y, sin_phi * slope.x + cos_phi * slope.y);
-        return normalize(Vec3f(-slope.x * alpha_u, -slope.y * alpha_v, 1.f));
+        return normalize(Vec3f(-slope.x * au(), -slope.y * av(), 1.f));
     }
 
 private:
     // Sampling proportional to D(m) cos(theta_m): tan^2(theta) = -a^2 log(1-u) (Beckmann), a^2 u / (1-u) (GGX),
     // with the anisotropic azimuth tan(phi) = (av/au) tan(2 pi u) and a^2 = 1 / (cos^2 phi/au^2 + sin^2 phi/av^2).
     Vec3f sample_all(const Vec2f& u) const {
-        float phi = std::atan(alpha_v / alpha_u * std::tan(Pi + 2.f * Pi * u.y)) + Pi * std::floor(2.f * u.y + 0.5f);
+        float phi = std::atan(av() / au() * std::tan(Pi + 2.f * Pi * u.y)) + Pi * std::floor(2.f * u.y + 0.5f);
         const float cp = std::cos(phi), sp = std::sin(phi);
-        const float a2 = 1.f / (sqr(cp / alpha_u) + sqr(sp / alpha_v));
+        const float a2 = 1.f / (sqr(cp / au()) + sqr(sp / av()));
         const float tan2 = type == MicrofacetType::Beckmann ? -a2 * std::log1p(-u.x) : a2 * u.x / (1.f - u.x);
         const float cos_theta = 1.f / std::sqrt(1.f + tan2);
         const float sin_theta = std::sqrt(std::max(0.f, 1.f - cos_theta * cos_theta));
@@ -163,6 +171,39 @@ private:
         return {erfinv(float(b)), erfinv(float(2.0 * std::max(double(u.y), 1e-6) - 1.0))};
     }
 };
+
+// Directional albedos of a rough dielectric interface (relative IOR eta) lit from wi (wi.z > 0), as Mitsuba's
+// eval_reflectance / eval_transmittance tabulate them: expectations over visible normals m ~ D_wi of
+//   reflection:   F(wi.m) G1(wo, m),        wo = reflect(wi, m)        (zero unless wo.z > 0)
+//   transmission: (1 - F(wi.m)) G1(wo, m),  wo = refract(wi, m)        (zero unless wo.z < 0)
+// by an n x n Gauss-Legendre rule on the sampling square (n = 32 for eta > 1, else 128: total internal
+// reflection makes the integrand rougher). 1 - reflection != transmission: masking of the outgoing
+// direction removes energy from both.
+enum class InterfaceLobe { Reflection, Transmission };
+inline float rough_interface_albedo(MicrofacetDistribution<float> distr, const Vec3f& wi, float eta,
+                                    InterfaceLobe lobe) {
+    distr.sample_visible = true;
+    const int n = eta > 1.f ? 32 : 128;
+    std::vector<double> nodes, weights;
+    gauss_legendre(n, nodes, weights);
+    double sum = 0.0;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            const Vec2f u(float(0.5 * nodes[j] + 0.5), float(0.5 * nodes[i] + 0.5));
+            const Vec3f m = distr.sample(wi, u);
+            const FresnelDielectric<float> f = fresnel_dielectric(dot(wi, m), eta);
+            float value;
+            if (lobe == InterfaceLobe::Reflection) {
+                const Vec3f wo = reflect(wi, m);
+                value = wo.z > 0.f ? f.F * distr.G1(wo, m) : 0.f;
+            } else {
+                const Vec3f wo = refract(wi, m, f.cos_theta_t, f.eta_ti);
+                value = wo.z < 0.f ? (1.f - f.F) * distr.G1(wo, m) : 0.f;
+            }
+            sum += 0.25 * weights[i] * weights[j] * value;
+        }
+    return float(sum);
+}
 
 // Differential microfacet sampling (paper 002 §4.1, after Zeltner et al. 2021): the positivization of
 // ∂D/∂α(m) cos θ_m for an isotropic roughness α. With s = tan²θ_m / α², the derivative changes sign at s = 1

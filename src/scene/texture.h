@@ -18,6 +18,12 @@ public:
     virtual T eval_1(const SurfaceInteraction<T>& si) const = 0;
     PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_TEXTURE_METHODS)
 #undef PENUMBRA_TEXTURE_METHODS
+    // Gradient of eval_1 with respect to (u, v) (Mitsuba's eval_1_grad, used by `bumpmap`); zero for
+    // textures that are constant or piecewise constant in uv.
+#define PENUMBRA_TEXTURE_GRAD(T)                                                                             \
+    virtual Vec2<T> eval_1_grad(const SurfaceInteraction<T>&) const { return Vec2<T>(T(0), T(0)); }
+    PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_TEXTURE_GRAD)
+#undef PENUMBRA_TEXTURE_GRAD
     // Average value over the texture's domain.
     virtual Color3f mean() const = 0;
     virtual bool is_constant() const { return false; }

@@ -34,6 +34,8 @@ BSDFPtr make_blendbsdf(TexturePtr weight, BSDFPtr first, BSDFPtr second);
 BSDFPtr make_twosided(BSDFPtr front, BSDFPtr back); // back may be null (front used on both sides)
 BSDFPtr make_mask(TexturePtr opacity, BSDFPtr nested);
 BSDFPtr make_null_bsdf();
+BSDFPtr make_normalmap(TexturePtr normalmap, BSDFPtr nested);
+BSDFPtr make_bumpmap(TexturePtr height, float scale, BSDFPtr nested);
 // The parameters of `principled` (Mitsuba's defaults). has_spec_trans is Mitsuba's lobe flag: set when the
 // scene gives spec_trans other than the float 0 (it adds the transmission flag and keeps eta away from 1).
 struct PrincipledParams {
@@ -84,6 +86,8 @@ BSDFPtr load_blendbsdf(const Properties& props);
 BSDFPtr load_twosided(const Properties& props);
 BSDFPtr load_mask(const Properties& props);
 BSDFPtr load_null_bsdf(const Properties& props);
+BSDFPtr load_normalmap(const Properties& props);
+BSDFPtr load_bumpmap(const Properties& props);
 BSDFPtr load_principled(const Properties& props);
 BSDFPtr load_principledthin(const Properties& props);
 

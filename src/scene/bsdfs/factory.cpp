@@ -149,7 +149,9 @@ std::shared_ptr<Object> make_bsdf(const Properties& props, const LoadContext&) {
                                                           {"mask", load_mask},
                                                           {"null", load_null_bsdf},
                                                           {"principled", load_principled},
-                                                          {"principledthin", load_principledthin}};
+                                                          {"principledthin", load_principledthin},
+                                                          {"normalmap", load_normalmap},
+                                                          {"bumpmap", load_bumpmap}};
     const auto it = loaders.find(props.plugin());
     if (it != loaders.end()) return it->second(props);
     const auto why = out_of_scope_bsdfs().find(props.plugin());

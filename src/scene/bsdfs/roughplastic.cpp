@@ -1,8 +1,10 @@
 // Rough plastic: a rough dielectric coating (isotropic microfacets) over a diffuse base:
-//   f cos_o = s F(wi.h) D G / (4 cos_i) + R' (1 - E(cos_i)) (1 - E(cos_o)) cos_o / (pi eta^2),
-// where E(mu) is the rough coating's directional albedo (reflectance) seen from outside, R' = R / (1 - Fdr_int)
-// (or R / (1 - R Fdr_int) if nonlinear) and Fdr_int = 2 int E_int(mu) mu dmu is the internal albedo.
-// E is tabulated at load time (64 entries in mu, as Mitsuba) by quadrature over visible normals.
+//   f cos_o = s F(wi.h) D G / (4 cos_i) + R' T(cos_i) T(cos_o) cos_o / (pi eta^2),
+// where T(mu) is the rough coating's directional transmittance seen from outside (light refracted in, masked
+// by G1 of the refracted direction; not 1 - reflectance), R' = R / (1 - Fdr_int) (or R / (1 - R Fdr_int) if
+// nonlinear) and Fdr_int = 2 int E_int(mu) mu dmu is the internal albedo, E_int the reflectance from inside.
+// Both are tabulated at load time as Mitsuba does (64 entries mu_i = max(1e-6, i / 63); Fdr_int = 2 mean_i
+// E_int(mu_i) mu_i; Gauss-Legendre quadrature over visible normals, core/microfacet.h).
 //
 // Mitsuba 3 parameters (src/bsdfs/roughplastic.cpp):
 //   distribution           string             "beckmann"               "beckmann" or "ggx"
@@ -17,6 +19,8 @@
 #include "core/warp.h"
 #include "scene/bsdfs/bsdfs.h"
 
+#include <tbb/parallel_for.h>
+
 #include <array>
 
 namespace penumbra {
@@ -24,25 +28,6 @@ namespace penumbra {
 namespace {
 
 constexpr int AlbedoRes = 64;
-
-// Directional albedo of a rough dielectric interface (reflection only) for incidence cosine mu:
-// E(mu) = E_{m ~ D_wi}[F(wi.m) G1(wo, m)], wo = reflect(wi, m), by a midpoint rule over the visible-normal
-// sampling domain (n x n points).
-float rough_reflectance(const MicrofacetDistribution<float>& distr, float mu, float eta) {
-    constexpr int n = 48;
-    const Vec3f wi(std::sqrt(std::max(0.f, 1.f - mu * mu)), 0.f, mu);
-    MicrofacetDistribution<float> vis = distr;
-    vis.sample_visible = true;
-    double sum = 0.0;
-    for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-            const Vec3f m = vis.sample(wi, Vec2f((i + 0.5f) / n, (j + 0.5f) / n));
-            const Vec3f wo = reflect(wi, m);
-            if (wo.z <= 0.f) continue;
-            sum += fresnel_dielectric(dot(wi, m), eta).F * vis.G1(wo, m);
-        }
-    return float(sum / (n * n));
-}
 
 } // namespace
 
@@ -58,14 +43,19 @@ public:
         const Color3f d = diffuse_->mean(), s = specular_->mean();
         const float dm = (d.x + d.y + d.z) / 3.f, sm = (s.x + s.y + s.z) / 3.f;
         specular_weight_ = sm / (dm + sm);
-        // Mitsuba's tables: mu_i = max(1e-6, i / 63); internal albedo = 2 mean_i(E_int(mu_i) mu_i).
-        double internal = 0.0;
-        for (int i = 0; i < AlbedoRes; ++i) {
+        // Table entries in parallel (each is a 32^2 or 128^2 quadrature), summed in order: deterministic.
+        std::array<float, AlbedoRes> internal{};
+        tbb::parallel_for(0, AlbedoRes, [&](int i) {
             const float mu = std::max(1e-6f, float(i) / (AlbedoRes - 1));
-            external_transmittance_[i] = 1.f - rough_reflectance(distr_, mu, eta_);
-            internal += rough_reflectance(distr_, mu, 1.f / eta_) * mu;
-        }
-        internal_reflectance_ = float(2.0 * internal / AlbedoRes);
+            const Vec3f wi(std::sqrt(1.f - mu * mu), 0.f, mu);
+            external_transmittance_[i] =
+                rough_interface_albedo(distr_, wi, eta_, InterfaceLobe::Transmission);
+            internal[i] = rough_interface_albedo(distr_, wi, 1.f / eta_, InterfaceLobe::Reflection) * mu;
+        });
+        double sum = 0.0;
+        for (const float v : internal)
+            sum += v;
+        internal_reflectance_ = float(2.0 * sum / AlbedoRes);
         flags_ = BSDFGlossyReflection | BSDFDiffuseReflection;
     }
 
@@ -119,7 +109,7 @@ private:
         d.sample_visible = distr_.sample_visible;
         return d;
     }
-    // Linear interpolation of the 1 - E(mu) table.
+    // Linear interpolation of the T(mu) table.
     template <typename T> T transmittance(const T& mu) const {
         const T x = mu * T(AlbedoRes - 1);
         const int i = std::min(int(detach(x)), AlbedoRes - 2);

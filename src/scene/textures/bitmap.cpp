@@ -6,11 +6,13 @@
 //   wrap_mode    string     repeat      repeat | mirror | clamp
 //   raw          boolean    false       true: keep 8-bit values as stored (no sRGB -> linear decoding)
 //   to_uv        transform  none        affine map applied to the uv coordinates first
+// Differentiable (traverse): `data`, the linear texel values (3 per texel, row-major, top row first).
 //
 // Uv convention (as Mitsuba): (u, v) = (0, 0) is the top-left corner of the image, u to the right, v down;
 // texel (i, j) covers [i, i+1]/W x [j, j+1]/H. Mitsuba's mesh loaders flip v (v = 1 - v_obj) so that OBJ uvs,
 // whose v points up, address the image the usual way.
 #include "core/image.h"
+#include "core/param.h"
 #include "scene/textures/textures.h"
 
 #include <cmath>
@@ -33,8 +35,8 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
     }
 
     // Bilinear: f(u W - 1/2, v H - 1/2) interpolated between the four nearest texel centers; nearest: the
-    // texel containing (u W, v H). Texel values are constants; derivatives flow through the interpolation
-    // weights.
+    // texel containing (u W, v H). Derivatives flow through the interpolation weights and, when `data` is
+    // differentiated, through the texel values.
     template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>& si) const {
         const T u = si.uv.x * to_uv_[0] + si.uv.y * to_uv_[1] + T(to_uv_[2]);
         const T v = si.uv.x * to_uv_[3] + si.uv.y * to_uv_[4] + T(to_uv_[5]);
@@ -42,17 +44,43 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
         if (!bilinear_) {
             const int x = wrap(int(std::floor(detach(u) * float(w))), w);
             const int y = wrap(int(std::floor(detach(v) * float(h))), h);
-            return Color3<T>(image_.at(x, y));
+            return texel<T>(x, y);
         }
         const T px = u * float(w) - T(0.5f), py = v * float(h) - T(0.5f);
         const int x0 = int(std::floor(detach(px))), y0 = int(std::floor(detach(py)));
         const T wx = px - T(float(x0)), wy = py - T(float(y0));
         const int xa = wrap(x0, w), xb = wrap(x0 + 1, w), ya = wrap(y0, h), yb = wrap(y0 + 1, h);
-        const Color3<T> top =
-            Color3<T>(image_.at(xa, ya)) * (T(1.f) - wx) + Color3<T>(image_.at(xb, ya)) * wx;
-        const Color3<T> bottom =
-            Color3<T>(image_.at(xa, yb)) * (T(1.f) - wx) + Color3<T>(image_.at(xb, yb)) * wx;
+        const Color3<T> top = texel<T>(xa, ya) * (T(1.f) - wx) + texel<T>(xb, ya) * wx;
+        const Color3<T> bottom = texel<T>(xa, yb) * (T(1.f) - wx) + texel<T>(xb, yb) * wx;
         return top * (T(1.f) - wy) + bottom * wy;
+    }
+
+    // d eval_1 / d(u, v) of the bilinear interpolant (zero for nearest: piecewise constant), with eval_1 the
+    // channel mean: d/du = W [(f10 - f00)(1 - wy) + (f11 - f01) wy],
+    //               d/dv = H [(f01 - f00)(1 - wx) + (f11 - f10) wx], chained through the to_uv map.
+    template <typename T> Vec2<T> eval_1_grad_t(const SurfaceInteraction<T>& si) const {
+        if (!bilinear_) return Vec2<T>(T(0), T(0));
+        const T u = si.uv.x * to_uv_[0] + si.uv.y * to_uv_[1] + T(to_uv_[2]);
+        const T v = si.uv.x * to_uv_[3] + si.uv.y * to_uv_[4] + T(to_uv_[5]);
+        const int w = image_.width, h = image_.height;
+        const T px = u * float(w) - T(0.5f), py = v * float(h) - T(0.5f);
+        const int x0 = int(std::floor(detach(px))), y0 = int(std::floor(detach(py)));
+        const T wx = px - T(float(x0)), wy = py - T(float(y0));
+        const int xa = wrap(x0, w), xb = wrap(x0 + 1, w), ya = wrap(y0, h), yb = wrap(y0 + 1, h);
+        const auto mean = [](const Color3<T>& c) { return (c.x + c.y + c.z) * T(1.f / 3.f); };
+        const T f00 = mean(texel<T>(xa, ya)), f10 = mean(texel<T>(xb, ya));
+        const T f01 = mean(texel<T>(xa, yb)), f11 = mean(texel<T>(xb, yb));
+        const T d_du = ((f10 - f00) * (T(1.f) - wy) + (f11 - f01) * wy) * float(w);
+        const T d_dv = ((f01 - f00) * (T(1.f) - wx) + (f11 - f10) * wx) * float(h);
+        return {d_du * to_uv_[0] + d_dv * to_uv_[3], d_du * to_uv_[1] + d_dv * to_uv_[4]};
+    }
+#define PENUMBRA_BITMAP_GRAD(T)                                                                              \
+    Vec2<T> eval_1_grad(const SurfaceInteraction<T>& si) const override { return eval_1_grad_t<T>(si); }
+    PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_BITMAP_GRAD)
+#undef PENUMBRA_BITMAP_GRAD
+
+    void traverse(ParamVisitor& v) override {
+        v.put("data", &image_.pixels[0].x, int(3 * image_.pixels.size()), &index_);
     }
 
     Color3f mean() const override { return mean_; }
@@ -63,6 +91,11 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
     }
 
   private:
+    // Texel (x, y) as stored, or as parameters 3 (y W + x) .. + 2 of `data` when it is differentiated.
+    template <typename T> Color3<T> texel(int x, int y) const {
+        const int i = index_ < 0 ? -1 : index_ + 3 * (y * image_.width + x);
+        return param_color<T>(image_.at(x, y), i);
+    }
     // Maps an integer texel index into [0, n) according to the wrap mode (mirror has period 2n: ... 1 0 | 0 1
     // ...).
     int wrap(int i, int n) const {
@@ -85,6 +118,7 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
     std::array<float, 6> to_uv_;
     std::string name_;
     Color3f mean_;
+    int index_ = -1;
 };
 
 } // namespace
