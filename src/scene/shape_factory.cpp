@@ -12,6 +12,7 @@
 //  cube        face_normals     bool       false
 //  sphere      center           point      (0, 0, 0)
 //              radius           float      1
+//  cylinder    p0, p1, radius   (shapes/cylinder.cpp)
 //  all         to_world         transform  identity
 //              flip_normals     bool       false
 //              nested bsdf (at most one; default: diffuse), area emitter (at most one),
@@ -23,6 +24,7 @@
 #include "scene/factory.h"
 #include "scene/medium.h"
 #include "scene/shape.h"
+#include "scene/shapes/shapes.h"
 
 namespace penumbra {
 namespace {
@@ -72,7 +74,11 @@ std::shared_ptr<T> at_most_one(const Properties& props, ObjectKind kind, const c
 std::shared_ptr<Object> make_shape(const Properties& props, const LoadContext& ctx) {
     const std::string& type = props.plugin();
     const bool from_file = type == "obj" || type == "ply" || type == "serialized";
-    if (!from_file && type != "rectangle" && type != "cube" && type != "disk" && type != "sphere")
+    if (type == "sdfgrid")
+        throw LoadError(props.location(), "unsupported shape plugin 'sdfgrid' (penumbra intersects triangle meshes "
+                                          "only; convert the signed distance field to a mesh, e.g. by marching cubes)");
+    if (!from_file && type != "rectangle" && type != "cube" && type != "disk" && type != "sphere" &&
+        type != "cylinder")
         throw_unsupported_plugin(props, ObjectKind::Shape);
 
     auto shape = std::make_shared<Shape>();
@@ -86,6 +92,8 @@ std::shared_ptr<Object> make_shape(const Properties& props, const LoadContext& c
         shape->mesh = make_cube_mesh();
     } else if (type == "disk") {
         shape->mesh = make_disk_mesh(DiskSegments);
+    } else if (type == "cylinder") {
+        shape->mesh = make_cylinder(props);
     } else {
         const float radius = props.get_float("radius", 1.f);
         if (!(radius > 0.f) || !std::isfinite(radius)) props.raise("radius", "must be positive");
