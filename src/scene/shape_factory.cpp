@@ -13,6 +13,7 @@
 //  sphere      center           point      (0, 0, 0)
 //              radius           float      1
 //  cylinder    p0, p1, radius   (shapes/cylinder.cpp)
+//  shapegroup, instance         (shapes/instance.cpp)
 //  linearcurve, bsplinecurve    filename, silhouette_sampling_weight (shapes/linearcurve.cpp,
 //                               bsplinecurve.cpp); to_world moves the control points, not the radii
 //  all         to_world         transform  identity
@@ -26,6 +27,7 @@
 #include "scene/factory.h"
 #include "scene/medium.h"
 #include "scene/shape.h"
+#include "scene/shapes/instance.h"
 #include "scene/shapes/shapes.h"
 
 namespace penumbra {
@@ -75,6 +77,8 @@ std::shared_ptr<T> at_most_one(const Properties& props, ObjectKind kind, const c
 
 std::shared_ptr<Object> make_shape(const Properties& props, const LoadContext& ctx) {
     const std::string& type = props.plugin();
+    if (type == "shapegroup") return make_shapegroup(props);
+    if (type == "instance") return make_instance(props);
     const bool from_file = type == "obj" || type == "ply" || type == "serialized";
     if (type == "sdfgrid")
         throw LoadError(props.location(), "unsupported shape plugin 'sdfgrid' (penumbra intersects triangle meshes "
