@@ -1,5 +1,6 @@
 // linearcurve / bsplinecurve: the curve file format, Mitsuba's uv convention and the silhouette of straight
 // curves seen from the side (2 r L, plus pi r^2 for the end caps of a linear curve).
+#include "diff/parameters.h"
 #include "scene/scene.h"
 
 #include "shape_test_util.h"
@@ -100,4 +101,28 @@ TEST(ShapeCurves, FileErrorsNameTheFileAndLine) {
     const std::string bad = error("linearcurve", "bad.txt");
     EXPECT_NE(bad.find("bad.txt:2: expected a control point"), std::string::npos) << bad;
     EXPECT_EQ(error("linearcurve", "short.txt"), "no error");
+}
+
+// Derivatives that move a curve are refused (the boundary terms of tessellated tubes are not yet validated
+// against finite differences); its tessellation's vertices are not parameters; a scene with a static curve
+// still differentiates other parameters.
+TEST(ShapeCurves, DerivativesMovingCurvesAreRefused) {
+    test::TempDir dir;
+    dir.write("line.txt", "0 0 0 0.1\n1 0 0 0.1\n");
+    const auto scene = load_scene_string(test::scene(R"(
+        <shape type="linearcurve" id="curve"><string name="filename" value="line.txt"/></shape>
+        <shape type="sphere" id="ball"/>)"),
+                                         dir.str());
+    Parameters params(*scene);
+    try {
+        params.enable({parse_param_selection("curve.translate=1,0,0")});
+        ADD_FAILURE() << "a motion of a curve was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("derivatives that move a linearcurve are not supported"),
+                  std::string::npos)
+            << e.what();
+    }
+    EXPECT_THROW(params.find("curve.vertex_positions"), Error);
+    EXPECT_NO_THROW(params.enable({parse_param_selection("ball.translate=1,0,0")}));
+    EXPECT_NO_THROW(params.enable_all_data());
 }

@@ -1,9 +1,12 @@
 // cylinder: Mitsuba 3's parameterization, its silhouette (2 r h seen from the side), its area and the power
 // of a cylinder area emitter.
+#include "diff/parameters.h"
+#include "diff/psdr.h"
 #include "scene/emitter.h"
 #include "scene/factory.h"
 #include "scene/shape.h"
 
+#include "diff_check.h"
 #include "shape_test_util.h"
 
 #include <gtest/gtest.h>
@@ -113,4 +116,36 @@ TEST(ShapeCylinder, AreaEmitterPower) {
         sum += w.x;
     }
     EXPECT_NEAR(sum / n, exact, 1.1e-4 * exact);
+}
+
+// The cylinder is a mesh like the sphere, so its motions are differentiated by the same estimators: a tube
+// moving in front of an emitting panel (max_depth 1: the primary boundary term of its silhouette and open
+// ends) against central differences (diff_check.h tolerances).
+TEST(ShapeCylinder, TranslateDerivativeMatchesFiniteDifferences) {
+    const auto scene = load_scene_string(R"(<scene version="3.0.0">
+      <integrator type="path"><integer name="max_depth" value="1"/></integrator>
+      <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/><rfilter type="box"/></film></sensor>
+      <shape type="cylinder" id="tube"><float name="radius" value="0.25"/>
+        <point name="p0" x="-0.6" y="-0.2" z="0"/><point name="p1" x="-0.3" y="0.1" z="0.3"/></shape>
+      <shape type="rectangle"><transform name="to_world"><translate z="-1"/></transform>
+        <emitter type="area"><rgb name="radiance" value="1, 2, 3"/></emitter></shape>
+    </scene>)");
+    Parameters params(*scene);
+    params.enable({parse_param_selection("tube.translate=1,0.5,0")});
+    PsdrOptions o;
+    o.interior.spp = 4;
+    o.interior.batches = 16;
+    o.interior.seed = 3;
+    o.interior.path = path_settings(*scene);
+    o.primary_spp = 16;
+    o.direct_spp = o.indirect_spp = o.pixel_spp = 0; // max_depth 1: no light paths; the camera does not move
+    const PsdrDerivative d = psdr_derivative(*scene, params, o);
+    RenderOptions ro;
+    ro.spp = 256;
+    ro.seed = 5;
+    const FiniteDifference fd = finite_difference(*scene, params, 2e-3, ro, 16);
+    const test::DiffCheck c = test::check_against(d.total, d.total_stderr, fd.derivative, fd.stderr_img);
+    RecordProperty("check", test::describe(c));
+    EXPECT_TRUE(c.passes()) << test::describe(c);
 }

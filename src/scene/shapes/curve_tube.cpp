@@ -84,11 +84,20 @@ uint32_t append_ring(TriangleMesh& m, const Vec3f& c, const Vec3f& dc, float r, 
 }
 
 // Quads between ring0 (behind) and ring1 (ahead along the tangent): around the ring u turns from u_rad to
-// u_rot = t x u_rad, so (step in u) x (step along t) points outward.
+// u_rot = t x u_rad, so (step in u) x (step along t) points outward. Triangles with two coincident vertices
+// (at a ring of radius zero: a sphere's pole, a curve tapering to a point) are left out.
 void connect_rings(TriangleMesh& m, uint32_t ring0, uint32_t ring1) {
-    for (uint32_t k = 0; k < uint32_t(CurveRingSegments); ++k)
-        m.indices.insert(m.indices.end(),
-                         {ring0 + k, ring0 + k + 1, ring1 + k + 1, ring0 + k, ring1 + k + 1, ring1 + k});
+    auto add = [&](uint32_t a, uint32_t b, uint32_t c) {
+        const Vec3f& pa = m.positions[a];
+        const Vec3f& pb = m.positions[b];
+        const Vec3f& pc = m.positions[c];
+        if (pa == pb || pb == pc || pc == pa) return;
+        m.indices.insert(m.indices.end(), {a, b, c});
+    };
+    for (uint32_t k = 0; k < uint32_t(CurveRingSegments); ++k) {
+        add(ring0 + k, ring0 + k + 1, ring1 + k + 1);
+        add(ring0 + k, ring1 + k + 1, ring1 + k);
+    }
 }
 
 // Rings of latitude from the -axis pole to the +axis pole, each a ring of append_ring with the sphere's
@@ -96,8 +105,8 @@ void connect_rings(TriangleMesh& m, uint32_t ring0, uint32_t ring1) {
 void append_sphere(TriangleMesh& m, const Vec3f& c, float r, const Vec3f& axis, float v) {
     uint32_t previous = 0;
     for (int i = 0; i <= SphereRings; ++i) {
-        const float theta = Pi * float(i) / float(SphereRings); // from -axis to +axis
-        const float z = -std::cos(theta);
+        const float theta = Pi * float(i) / float(SphereRings);                    // from -axis to +axis
+        const float z = i == 0 ? -1.f : i == SphereRings ? 1.f : -std::cos(theta); // exact poles
         // The ring at height r z, of radius r sqrt(1 - z^2): append_ring's ring with sin(a) = z.
         const uint32_t ring = append_ring(m, c, axis, r, -z * norm(axis), v);
         if (i > 0) connect_rings(m, previous, ring);
