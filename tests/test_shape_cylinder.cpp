@@ -1,5 +1,6 @@
 // cylinder: Mitsuba 3's parameterization, its silhouette (2 r h seen from the side), its area and the power
 // of a cylinder area emitter.
+#include "diff/edges.h"
 #include "diff/parameters.h"
 #include "diff/psdr.h"
 #include "scene/emitter.h"
@@ -148,4 +149,19 @@ TEST(ShapeCylinder, TranslateDerivativeMatchesFiniteDifferences) {
     const test::DiffCheck c = test::check_against(d.total, d.total_stderr, fd.derivative, fd.stderr_img);
     RecordProperty("check", test::describe(c));
     EXPECT_TRUE(c.passes()) << test::describe(c);
+}
+
+// The uv seams of the tessellated primitives are welded: their duplicated vertices sit at exactly the same
+// positions, so the seam is an interior edge and not a pair of boundary edges (which the boundary estimators
+// take for silhouettes wherever they are). Boundary edges remain only where the surface ends.
+TEST(ShapeCylinder, SeamsOfTessellatedPrimitivesAreWelded) {
+    auto boundary_edges = [](const TriangleMesh& m) {
+        int n = 0;
+        for (const Edge& e : discontinuity_edges(m))
+            n += e.f1 < 0 ? 1 : 0;
+        return n;
+    };
+    EXPECT_EQ(boundary_edges(make_sphere_mesh(Vec3f(0.f), 1.f, 16, 32)), 0);
+    EXPECT_EQ(boundary_edges(make_disk_mesh(64)), 64);
+    EXPECT_EQ(boundary_edges(cylinder({0.f, 0.f, 0.f}, {1.f, 2.f, 3.f}, 0.5f)->mesh), 2 * 128);
 }

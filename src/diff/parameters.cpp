@@ -170,12 +170,6 @@ void Parameters::enable(const std::vector<std::pair<std::string, std::vector<flo
                             std::to_string(p.size) + ", 3 (per 3-vector) or 1 value(s), got " + std::to_string(dir.size()));
             continue;
         }
-        // Curves are tessellated tubes whose silhouettes the boundary estimators do not yet match against finite
-        // differences (tests/test_shape_curves.cpp); refusing is better than a wrong derivative.
-        if (p.shape && (p.shape->plugin == "linearcurve" || p.shape->plugin == "bsplinecurve"))
-            throw Error("motion '" + name + "': derivatives that move a " + p.shape->plugin +
-                        " are not supported (its tessellated silhouette is not yet validated against finite "
-                        "differences)");
         // Motions: θ is a scalar; the vector says which way.
         direction_.push_back(1.f);
         Motion m{p.kind, Vec3f(0.f), Vec3f(0.f), index};

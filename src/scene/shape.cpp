@@ -79,8 +79,8 @@ SurfaceInteraction3f Shape::compute_surface_interaction(const Ray& ray, float t,
     return si;
 }
 
-// Curves keep their tessellation's vertices out of the parameters (Mitsuba's key is `control_points`, and
-// derivatives moving curves are refused: diff/parameters.cpp).
+// Curves keep their tessellation's vertices out of the parameters (Mitsuba's key is `control_points`, which
+// penumbra does not expose); their motions (translate, rotate, scale) are differentiated like any shape's.
 void Shape::traverse(ParamVisitor& v) {
     const bool curve = plugin == "linearcurve" || plugin == "bsplinecurve";
     if (!mesh.positions.empty() && !curve) v.put("vertex_positions", &mesh.positions[0].x, int(3 * mesh.vertex_count()),

@@ -74,7 +74,10 @@ uint32_t append_ring(TriangleMesh& m, const Vec3f& c, const Vec3f& dc, float r, 
     const float sin_a = std::clamp(-dr / speed, -1.f, 1.f), cos_a = std::sqrt(1.f - sin_a * sin_a);
     const uint32_t first = uint32_t(m.positions.size());
     for (int k = 0; k <= CurveRingSegments; ++k) {
-        const float u = float(k) / float(CurveRingSegments), phi = 2.f * Pi * u;
+        // The seam vertex (u = 1) repeats the first one exactly, so that the seam's edges are merged as
+        // interior edges (cos(2 pi) and sin(2 pi) are not exactly 1 and 0 in float).
+        const float u = float(k) / float(CurveRingSegments),
+                    phi = k == CurveRingSegments ? 0.f : 2.f * Pi * u;
         const Vec3f n = (u_rad * std::cos(phi) + u_rot * std::sin(phi)) * cos_a + t * sin_a;
         m.positions.push_back(c + n * r);
         m.normals.push_back(n);

@@ -36,7 +36,9 @@ TriangleMesh make_cylinder(const Properties& props) {
 
     TriangleMesh m;
     for (int i = 0; i <= CylinderSegments; ++i) {
-        const float u = float(i) / float(CylinderSegments), phi = 2.f * Pi * u;
+        // The seam vertices (u = 1) repeat the first ones exactly (cos(2 pi) is not 1 in float), so that the
+        // seam's edges are merged as interior edges rather than taken for boundary (always silhouette) edges.
+        const float u = float(i) / float(CylinderSegments), phi = i == CylinderSegments ? 0.f : 2.f * Pi * u;
         const Vec3f n = frame.s * std::cos(phi) + frame.t * std::sin(phi);
         for (int j = 0; j <= 1; ++j) {
             m.positions.push_back(p0 + n * radius + d * float(j));
