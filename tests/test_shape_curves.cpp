@@ -103,6 +103,15 @@ TEST(ShapeCurves, FileErrorsNameTheFileAndLine) {
     const std::string bad = error("linearcurve", "bad.txt");
     EXPECT_NE(bad.find("bad.txt:2: expected a control point"), std::string::npos) << bad;
     EXPECT_EQ(error("linearcurve", "short.txt"), "no error");
+    try {
+        load_scene_string(test::scene(R"(<shape type="linearcurve"><string name="filename" value="short.txt"/>
+            <emitter type="area"/></shape>)"),
+                          dir.str());
+        ADD_FAILURE() << "a linearcurve emitter was accepted";
+    } catch (const LoadError& e) {
+        EXPECT_NE(std::string(e.what()).find("a linearcurve cannot carry an area emitter"), std::string::npos)
+            << e.what();
+    }
 }
 
 // The tessellation's vertices are not parameters (Mitsuba's curves expose control_points instead).

@@ -16,7 +16,8 @@ struct Scene::EmbreeState {
     std::map<const ShapeGroup*, RTCScene> groups; // one BVH per instanced group, shared by its instances
     std::string error;
     ~EmbreeState() {
-        for (auto& [group, bvh] : groups) rtcReleaseScene(bvh);
+        for (auto& [group, bvh] : groups)
+            rtcReleaseScene(bvh);
         if (scene) rtcReleaseScene(scene);
         if (device) rtcReleaseDevice(device);
     }
@@ -36,15 +37,18 @@ size_t Scene::triangle_count() const {
 
 size_t Scene::instanced_triangle_count() const {
     size_t n = 0;
-    for (const auto& s : shapes) n += s->mesh.face_count();
-    for (const auto& i : instances) n += i->group->triangle_count();
+    for (const auto& s : shapes)
+        n += s->mesh.face_count();
+    for (const auto& i : instances)
+        n += i->group->triangle_count();
     return n;
 }
 
 namespace {
 
 // A triangle geometry of `mesh` attached to `bvh` under `id`; returns the mesh bounds via lo, hi.
-void attach_mesh(RTCDevice device, RTCScene bvh, const TriangleMesh& mesh, unsigned id, Vec3f& lo, Vec3f& hi) {
+void attach_mesh(RTCDevice device, RTCScene bvh, const TriangleMesh& mesh, unsigned id, Vec3f& lo,
+                 Vec3f& hi) {
     RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     // Embree-allocated buffers carry the padding its SIMD loads need.
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -57,8 +61,8 @@ void attach_mesh(RTCDevice device, RTCScene bvh, const TriangleMesh& mesh, unsig
         lo = min(lo, p);
         hi = max(hi, p);
     }
-    auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                               sizeof(uint32_t) * 3, mesh.face_count()));
+    auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, sizeof(uint32_t) * 3, mesh.face_count()));
     std::memcpy(idx, mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
     rtcCommitGeometry(geom);
     rtcAttachGeometryByID(bvh, geom, id);
@@ -68,7 +72,8 @@ void attach_mesh(RTCDevice device, RTCScene bvh, const TriangleMesh& mesh, unsig
 // Embree's 3x4 column-major affine matrix of a transform.
 void to_embree(const Transform& t, float xfm[12]) {
     for (int col = 0; col < 4; ++col)
-        for (int row = 0; row < 3; ++row) xfm[3 * col + row] = t.matrix.m[row][col];
+        for (int row = 0; row < 3; ++row)
+            xfm[3 * col + row] = t.matrix.m[row][col];
 }
 
 } // namespace
@@ -87,7 +92,8 @@ void Scene::build() {
     rtcSetSceneFlags(embree_->scene, RTC_SCENE_FLAG_ROBUST);
 
     Vec3f lo(Infinity), hi(-Infinity);
-    for (unsigned id = 0; id < shapes.size(); ++id) attach_mesh(embree_->device, embree_->scene, shapes[id]->mesh, id, lo, hi);
+    for (unsigned id = 0; id < shapes.size(); ++id)
+        attach_mesh(embree_->device, embree_->scene, shapes[id]->mesh, id, lo, hi);
     std::map<const ShapeGroup*, std::pair<Vec3f, Vec3f>> group_bounds;
     for (unsigned i = 0; i < instances.size(); ++i) {
         const Instance& instance = *instances[i];

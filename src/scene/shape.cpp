@@ -83,8 +83,9 @@ SurfaceInteraction3f Shape::compute_surface_interaction(const Ray& ray, float t,
 // penumbra does not expose); their motions (translate, rotate, scale) are differentiated like any shape's.
 void Shape::traverse(ParamVisitor& v) {
     const bool curve = plugin == "linearcurve" || plugin == "bsplinecurve";
-    if (!mesh.positions.empty() && !curve) v.put("vertex_positions", &mesh.positions[0].x, int(3 * mesh.vertex_count()),
-                                       &vertex_param_index, true);
+    if (!mesh.positions.empty() && !curve)
+        v.put("vertex_positions", &mesh.positions[0].x, int(3 * mesh.vertex_count()), &vertex_param_index,
+              true);
     if (bsdf) v.put_object("bsdf", bsdf.get());
     if (emitter) v.put_object("emitter", emitter.get());
 }

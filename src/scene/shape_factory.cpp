@@ -81,8 +81,9 @@ std::shared_ptr<Object> make_shape(const Properties& props, const LoadContext& c
     if (type == "instance") return make_instance(props);
     const bool from_file = type == "obj" || type == "ply" || type == "serialized";
     if (type == "sdfgrid")
-        throw LoadError(props.location(), "unsupported shape plugin 'sdfgrid' (penumbra intersects triangle meshes "
-                                          "only; convert the signed distance field to a mesh, e.g. by marching cubes)");
+        throw LoadError(props.location(),
+                        "unsupported shape plugin 'sdfgrid' (penumbra intersects triangle meshes "
+                        "only; convert the signed distance field to a mesh, e.g. by marching cubes)");
     const bool curve = type == "linearcurve" || type == "bsplinecurve";
     if (!from_file && !curve && type != "rectangle" && type != "cube" && type != "disk" && type != "sphere" &&
         type != "cylinder")
@@ -130,8 +131,9 @@ std::shared_ptr<Object> make_shape(const Properties& props, const LoadContext& c
         throw LoadError(shape->emitter->location,
                         "a shape can only carry an area emitter, not '" + shape->emitter->plugin + "'");
     if (shape->emitter && type == "linearcurve")
-        throw LoadError(shape->emitter->location, "a linearcurve cannot carry an area emitter (its tessellation "
-                                                  "overlaps at the joints, which would count twice in its area)");
+        throw LoadError(shape->emitter->location,
+                        "a linearcurve cannot carry an area emitter (its tessellation "
+                        "overlaps at the joints, which would count twice in its area)");
     shape->interior = std::dynamic_pointer_cast<Medium>(props.get_object("interior", ObjectKind::Medium));
     shape->exterior = std::dynamic_pointer_cast<Medium>(props.get_object("exterior", ObjectKind::Medium));
 
