@@ -131,8 +131,8 @@ TEST(ShapeFactory, RectangleCubeDiskAndSerializedParameters) {
 
 TEST(ShapeFactory, ErrorsNameTheLocationAndTheProblem) {
     EXPECT_NE(error_of([] {
-                  build(Properties("cylinder", xml));
-              }).find("scene.xml:7: unsupported shape plugin 'cylinder'"),
+                  build(Properties("sdfgrid", xml));
+              }).find("scene.xml:7: unsupported shape plugin 'sdfgrid' (penumbra intersects triangle meshes"),
               std::string::npos);
 
     Properties missing("ply", xml);

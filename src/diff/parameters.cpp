@@ -82,6 +82,12 @@ Vec3f rotate(const Vec3f& v, const Vec3f& a, float t) {
 } // namespace
 
 Parameters::Parameters(Scene& scene) {
+    // The estimators read world-space meshes (scene.shapes); instanced geometry would be silently missing
+    // from the boundary terms and misplaced in the interior term.
+    if (!scene.instances.empty())
+        throw Error("derivatives of scenes with instances (<shape type=\"instance\">) are not supported: "
+                    "instanced geometry is rendered but not seen by the derivative estimators; replace the "
+                    "instances by shapes to differentiate this scene");
     std::set<const Object*> seen;
     Collector root(all_, seen, "", nullptr);
     // Objects with ids first, so that shared objects are named by their id wherever they are used.

@@ -48,7 +48,9 @@ TriangleMesh make_cube_mesh() {
 TriangleMesh make_disk_mesh(int segments) {
     TriangleMesh m;
     for (int j = 0; j <= segments; ++j) {
-        const float phi = 2.f * Pi * float(j) / float(segments);
+        // The seam vertex repeats the first exactly (sin(2 pi) is not 0 in float): welded seams are interior
+        // edges.
+        const float phi = j == segments ? 0.f : 2.f * Pi * float(j) / float(segments);
         m.positions.emplace_back(std::cos(phi), std::sin(phi), 0.f);
         m.uvs.emplace_back(1.f, float(j) / float(segments));
     }
@@ -73,7 +75,9 @@ TriangleMesh make_sphere_mesh(const Vec3f& center, float radius, int rings, int 
         for (int j = 0; j <= segments; ++j) {
             const float u = pole ? (float(std::min(j, segments - 1)) + 0.5f) / float(segments)
                                  : float(j) / float(segments);
-            const float phi = 2.f * Pi * (pole ? 0.f : u);
+            // The seam column repeats the first exactly (sin(2 pi) is not 0 in float): welded seams are
+            // interior edges.
+            const float phi = pole || j == segments ? 0.f : 2.f * Pi * u;
             const Vec3f d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
             m.positions.push_back(center + d * radius);
             m.normals.push_back(d);

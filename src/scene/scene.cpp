@@ -3,15 +3,21 @@
 #include <embree3/rtcore.h>
 
 #include <cstring>
+#include <map>
+#include <set>
 #include <string>
 
 namespace penumbra {
 
+// Top-level geometry ids: shapes first (id = index in `shapes`), then instances (id = shapes.size() + index).
 struct Scene::EmbreeState {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
+    std::map<const ShapeGroup*, RTCScene> groups; // one BVH per instanced group, shared by its instances
     std::string error;
     ~EmbreeState() {
+        for (auto& [group, bvh] : groups)
+            rtcReleaseScene(bvh);
         if (scene) rtcReleaseScene(scene);
         if (device) rtcReleaseDevice(device);
     }
@@ -23,8 +29,54 @@ Scene::~Scene() = default;
 size_t Scene::triangle_count() const {
     size_t n = 0;
     for (const auto& s : shapes) n += s->mesh.face_count();
+    std::set<const ShapeGroup*> groups;
+    for (const auto& i : instances)
+        if (groups.insert(i->group.get()).second) n += i->group->triangle_count();
     return n;
 }
+
+size_t Scene::instanced_triangle_count() const {
+    size_t n = 0;
+    for (const auto& s : shapes)
+        n += s->mesh.face_count();
+    for (const auto& i : instances)
+        n += i->group->triangle_count();
+    return n;
+}
+
+namespace {
+
+// A triangle geometry of `mesh` attached to `bvh` under `id`; returns the mesh bounds via lo, hi.
+void attach_mesh(RTCDevice device, RTCScene bvh, const TriangleMesh& mesh, unsigned id, Vec3f& lo,
+                 Vec3f& hi) {
+    RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    // Embree-allocated buffers carry the padding its SIMD loads need.
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                          sizeof(float) * 3, mesh.vertex_count()));
+    for (size_t i = 0; i < mesh.vertex_count(); ++i) {
+        const Vec3f& p = mesh.positions[i];
+        v[3 * i] = p.x;
+        v[3 * i + 1] = p.y;
+        v[3 * i + 2] = p.z;
+        lo = min(lo, p);
+        hi = max(hi, p);
+    }
+    auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, sizeof(uint32_t) * 3, mesh.face_count()));
+    std::memcpy(idx, mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(bvh, geom, id);
+    rtcReleaseGeometry(geom);
+}
+
+// Embree's 3x4 column-major affine matrix of a transform.
+void to_embree(const Transform& t, float xfm[12]) {
+    for (int col = 0; col < 4; ++col)
+        for (int row = 0; row < 3; ++row)
+            xfm[3 * col + row] = t.matrix.m[row][col];
+}
+
+} // namespace
 
 void Scene::build() {
     if (!sensor) throw Error("scene has no sensor");
@@ -40,31 +92,43 @@ void Scene::build() {
     rtcSetSceneFlags(embree_->scene, RTC_SCENE_FLAG_ROBUST);
 
     Vec3f lo(Infinity), hi(-Infinity);
-    for (unsigned id = 0; id < shapes.size(); ++id) {
-        const TriangleMesh& mesh = shapes[id]->mesh;
-        RTCGeometry geom = rtcNewGeometry(embree_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        // Embree-allocated buffers carry the padding its SIMD loads need.
-        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                              sizeof(float) * 3, mesh.vertex_count()));
-        for (size_t i = 0; i < mesh.vertex_count(); ++i) {
-            const Vec3f& p = mesh.positions[i];
-            v[3 * i] = p.x;
-            v[3 * i + 1] = p.y;
-            v[3 * i + 2] = p.z;
+    for (unsigned id = 0; id < shapes.size(); ++id)
+        attach_mesh(embree_->device, embree_->scene, shapes[id]->mesh, id, lo, hi);
+    std::map<const ShapeGroup*, std::pair<Vec3f, Vec3f>> group_bounds;
+    for (unsigned i = 0; i < instances.size(); ++i) {
+        const Instance& instance = *instances[i];
+        const ShapeGroup* group = instance.group.get();
+        if (!embree_->groups.count(group)) {
+            RTCScene bvh = rtcNewScene(embree_->device);
+            rtcSetSceneBuildQuality(bvh, RTC_BUILD_QUALITY_HIGH);
+            rtcSetSceneFlags(bvh, RTC_SCENE_FLAG_ROBUST);
+            Vec3f glo(Infinity), ghi(-Infinity);
+            for (unsigned id = 0; id < group->shapes.size(); ++id)
+                attach_mesh(embree_->device, bvh, group->shapes[id]->mesh, id, glo, ghi);
+            rtcCommitScene(bvh);
+            embree_->groups[group] = bvh;
+            group_bounds[group] = {glo, ghi};
+        }
+        RTCGeometry geom = rtcNewGeometry(embree_->device, RTC_GEOMETRY_TYPE_INSTANCE);
+        rtcSetGeometryInstancedScene(geom, embree_->groups[group]);
+        float xfm[12];
+        to_embree(instance.to_world, xfm);
+        rtcSetGeometryTransform(geom, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
+        rtcCommitGeometry(geom);
+        rtcAttachGeometryByID(embree_->scene, geom, unsigned(shapes.size()) + i);
+        rtcReleaseGeometry(geom);
+        const auto [glo, ghi] = group_bounds[group];
+        for (int corner = 0; corner < 8; ++corner) {
+            const Vec3f p = instance.to_world.apply_point(
+                Vec3f(corner & 1 ? ghi.x : glo.x, corner & 2 ? ghi.y : glo.y, corner & 4 ? ghi.z : glo.z));
             lo = min(lo, p);
             hi = max(hi, p);
         }
-        auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                   sizeof(uint32_t) * 3, mesh.face_count()));
-        std::memcpy(idx, mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
-        rtcCommitGeometry(geom);
-        rtcAttachGeometryByID(embree_->scene, geom, id);
-        rtcReleaseGeometry(geom);
     }
     rtcCommitScene(embree_->scene);
     if (!embree_->error.empty()) throw Error("Embree: " + embree_->error);
 
-    if (shapes.empty()) {
+    if (shapes.empty() && instances.empty()) {
         bounds_ = {Vec3f(0.f), 1.f};
     } else {
         bounds_.center = (lo + hi) * 0.5f;
@@ -101,6 +165,11 @@ SurfaceInteraction3f Scene::intersect(const Ray& ray) const {
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(embree_->scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
+    if (rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
+        const Instance& instance = *instances[rh.hit.instID[0] - shapes.size()];
+        return instance.compute_surface_interaction(ray, rh.ray.tfar, *instance.group->shapes[rh.hit.geomID],
+                                                    rh.hit.primID, rh.hit.u, rh.hit.v);
+    }
     return shapes[rh.hit.geomID]->compute_surface_interaction(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v);
 }
 

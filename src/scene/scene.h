@@ -4,6 +4,7 @@
 #include "scene/medium.h"
 #include "scene/sensor.h"
 #include "scene/shape.h"
+#include "scene/shapes/instance.h"
 
 #include <map>
 #include <memory>
@@ -22,6 +23,7 @@ public:
     Scene& operator=(const Scene&) = delete;
 
     std::vector<std::shared_ptr<Shape>> shapes;
+    std::vector<std::shared_ptr<Instance>> instances; // placements of shapegroups (their meshes stored once)
     std::vector<std::shared_ptr<Emitter>> emitters; // all emitters, area emitters included
     std::shared_ptr<Sensor> sensor;
     std::shared_ptr<Integrator> integrator;
@@ -48,7 +50,10 @@ public:
     // Radiance from all infinite emitters along an escaped ray direction.
     Color3f eval_environment(const Vec3f& d) const;
 
+    // Triangles stored: the shapes' and each instanced group's once.
     size_t triangle_count() const;
+    // Triangles rendered: the shapes' and every instance's.
+    size_t instanced_triangle_count() const;
 
 private:
     struct EmbreeState;

@@ -89,7 +89,13 @@ class Instantiator {
     std::set<const XmlNode*> active_;
 };
 
+// A shapegroup is a declaration for instances to reference; it is not rendered by itself (as in Mitsuba).
 void add_shape(Scene& scene, const std::shared_ptr<Object>& obj) {
+    if (std::dynamic_pointer_cast<ShapeGroup>(obj)) return;
+    if (auto instance = std::dynamic_pointer_cast<Instance>(obj)) {
+        scene.instances.push_back(std::move(instance));
+        return;
+    }
     auto shape = as<Shape>(obj, ObjectKind::Shape);
     scene.shapes.push_back(shape);
     if (shape->emitter) {

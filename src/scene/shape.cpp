@@ -79,9 +79,13 @@ SurfaceInteraction3f Shape::compute_surface_interaction(const Ray& ray, float t,
     return si;
 }
 
+// Curves keep their tessellation's vertices out of the parameters (Mitsuba's key is `control_points`, which
+// penumbra does not expose); their motions (translate, rotate, scale) are differentiated like any shape's.
 void Shape::traverse(ParamVisitor& v) {
-    if (!mesh.positions.empty()) v.put("vertex_positions", &mesh.positions[0].x, int(3 * mesh.vertex_count()),
-                                       &vertex_param_index, true);
+    const bool curve = plugin == "linearcurve" || plugin == "bsplinecurve";
+    if (!mesh.positions.empty() && !curve)
+        v.put("vertex_positions", &mesh.positions[0].x, int(3 * mesh.vertex_count()), &vertex_param_index,
+              true);
     if (bsdf) v.put_object("bsdf", bsdf.get());
     if (emitter) v.put_object("emitter", emitter.get());
 }

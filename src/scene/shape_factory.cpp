@@ -12,6 +12,10 @@
 //  cube        face_normals     bool       false
 //  sphere      center           point      (0, 0, 0)
 //              radius           float      1
+//  cylinder    p0, p1, radius   (shapes/cylinder.cpp)
+//  shapegroup, instance         (shapes/instance.cpp)
+//  linearcurve, bsplinecurve    filename, silhouette_sampling_weight (shapes/linearcurve.cpp,
+//                               bsplinecurve.cpp); to_world moves the control points, not the radii
 //  all         to_world         transform  identity
 //              flip_normals     bool       false
 //              nested bsdf (at most one; default: diffuse), area emitter (at most one),
@@ -23,6 +27,8 @@
 #include "scene/factory.h"
 #include "scene/medium.h"
 #include "scene/shape.h"
+#include "scene/shapes/instance.h"
+#include "scene/shapes/shapes.h"
 
 namespace penumbra {
 namespace {
@@ -71,8 +77,16 @@ std::shared_ptr<T> at_most_one(const Properties& props, ObjectKind kind, const c
 
 std::shared_ptr<Object> make_shape(const Properties& props, const LoadContext& ctx) {
     const std::string& type = props.plugin();
+    if (type == "shapegroup") return make_shapegroup(props);
+    if (type == "instance") return make_instance(props);
     const bool from_file = type == "obj" || type == "ply" || type == "serialized";
-    if (!from_file && type != "rectangle" && type != "cube" && type != "disk" && type != "sphere")
+    if (type == "sdfgrid")
+        throw LoadError(props.location(),
+                        "unsupported shape plugin 'sdfgrid' (penumbra intersects triangle meshes "
+                        "only; convert the signed distance field to a mesh, e.g. by marching cubes)");
+    const bool curve = type == "linearcurve" || type == "bsplinecurve";
+    if (!from_file && !curve && type != "rectangle" && type != "cube" && type != "disk" && type != "sphere" &&
+        type != "cylinder")
         throw_unsupported_plugin(props, ObjectKind::Shape);
 
     auto shape = std::make_shared<Shape>();
@@ -86,6 +100,12 @@ std::shared_ptr<Object> make_shape(const Properties& props, const LoadContext& c
         shape->mesh = make_cube_mesh();
     } else if (type == "disk") {
         shape->mesh = make_disk_mesh(DiskSegments);
+    } else if (type == "cylinder") {
+        shape->mesh = make_cylinder(props);
+    } else if (type == "linearcurve") {
+        shape->mesh = make_linearcurve(props, ctx);
+    } else if (type == "bsplinecurve") {
+        shape->mesh = make_bsplinecurve(props, ctx);
     } else {
         const float radius = props.get_float("radius", 1.f);
         if (!(radius > 0.f) || !std::isfinite(radius)) props.raise("radius", "must be positive");
@@ -95,7 +115,7 @@ std::shared_ptr<Object> make_shape(const Properties& props, const LoadContext& c
     if (from_file || type == "cube") shape->face_normals = props.get_bool("face_normals", false);
     const bool flip_normals = props.get_bool("flip_normals", false);
 
-    shape->mesh.apply_transform(props.get_transform("to_world"));
+    if (!curve) shape->mesh.apply_transform(props.get_transform("to_world"));
     if (shape->face_normals)
         shape->mesh.normals.clear();
     else if (from_file && shape->mesh.normals.empty())
@@ -110,6 +130,10 @@ std::shared_ptr<Object> make_shape(const Properties& props, const LoadContext& c
     if (shape->emitter && !(shape->emitter->flags() & EmitterSurface))
         throw LoadError(shape->emitter->location,
                         "a shape can only carry an area emitter, not '" + shape->emitter->plugin + "'");
+    if (shape->emitter && type == "linearcurve")
+        throw LoadError(shape->emitter->location,
+                        "a linearcurve cannot carry an area emitter (its tessellation "
+                        "overlaps at the joints, which would count twice in its area)");
     shape->interior = std::dynamic_pointer_cast<Medium>(props.get_object("interior", ObjectKind::Medium));
     shape->exterior = std::dynamic_pointer_cast<Medium>(props.get_object("exterior", ObjectKind::Medium));
 
