@@ -122,6 +122,9 @@ void Parameters::add_motions(Scene& scene) {
 const Parameter& Parameters::find(const std::string& name) const {
     for (const Parameter& p : all_)
         if (p.name == name) return p;
+    // Mitsuba names a constant's value `<owner>.<param>.value`; the shorter `<owner>.<param>` is an alias.
+    for (const Parameter& p : all_)
+        if (p.name == name + ".value") return p;
     std::vector<std::pair<size_t, std::string>> close;
     for (const Parameter& p : all_) close.emplace_back(edit_distance(name, p.name), p.name);
     std::sort(close.begin(), close.end());
@@ -147,7 +150,7 @@ void Parameters::enable(const std::vector<std::pair<std::string, std::vector<flo
     for (const auto& [name, dir] : selection) {
         const Parameter& p = find(name);
         // A motion may be selected several times (e.g. the three axes of a translation), each with its own θ.
-        if (p.kind == Parameter::Kind::Data && !names.insert(name).second)
+        if (p.kind == Parameter::Kind::Data && !names.insert(p.name).second)
             throw Error("parameter '" + name + "' is selected twice");
         const int index = dimension_;
         enabled_.emplace_back(&p, index);

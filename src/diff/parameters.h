@@ -1,8 +1,9 @@
 // Differentiable scene parameters: discovery with Mitsuba 3 `traverse` names, geometric motions, and the
 // selection of the parameters (and the direction in parameter space) that an estimator differentiates.
 //
-// Names: an object with an `id` is named by it; nested objects append the name their parent gives them
-// (`plane.bsdf.reflectance`, `light.emitter.radiance`); objects without an id at the top level are named
+// Names: Mitsuba 3's traverse() keys. An object with an `id` is named by it; nested objects append the name
+// their parent gives them (`plane.bsdf.reflectance.value`, `light.emitter.radiance.value`: a constant's value
+// is `value`, and find() also accepts the name without it); objects without an id at the top level are named
 // `<kind>_<n>` (e.g. `shape_2`). Shared objects are listed once, under their id.
 // Motions (virtual scalar parameters θ with value 0 in the reference configuration, paper 001 §4.1):
 //   <shape>.translate  x -> x + θ d                 (d: a world-space vector)
