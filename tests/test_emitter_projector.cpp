@@ -233,10 +233,10 @@ TEST(EmitterProjector, ShadowOfATranslatingOccluder) {
     o.interior.batches = 16;
     o.interior.seed = 11;
     o.interior.path = path_settings(*s);
-    o.direct_spp = 1024;
+    o.direct_spp = 256;
     const PsdrDerivative d = psdr_derivative(*s, params, o);
     RenderOptions ro;
-    ro.spp = 1024;
+    ro.spp = 512;
     ro.seed = 99;
     const FiniteDifference fd = finite_difference(*s, params, 1e-2, ro, 16);
     const FiniteDifference fd2 = finite_difference(*s, params, 2e-2, ro, 16);
