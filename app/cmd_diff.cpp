@@ -167,10 +167,12 @@ void cmd_params(const Common& c) {
     Parameters params(*scene);
     std::printf("%-48s %10s  %s\n", "name", "size", "kind");
     for (const Parameter& p : params.all()) {
-        const char* kind = p.kind == Parameter::Kind::Data ? (p.geometry ? "geometry" : "value")
+        const char* kind = p.kind == Parameter::Kind::Data        ? (p.geometry ? "geometry" : "value")
                            : p.kind == Parameter::Kind::Translate ? "motion (direction: world vector)"
-                           : p.kind == Parameter::Kind::Rotate ? "motion (direction: world axis; radians)"
-                                                               : "motion (uniform scale)";
+                           : p.sensor                             ? "motion (direction: world axis; radians)"
+                           : p.kind == Parameter::Kind::Rotate
+                               ? "motion (direction: world axis; radians; NAME@cx,cy,cz: about that center)"
+                               : "motion (uniform scale; NAME@cx,cy,cz: about that center)";
         std::printf("%-48s %10d  %s\n", p.name.c_str(), p.size, kind);
     }
 }
