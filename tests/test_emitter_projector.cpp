@@ -272,3 +272,40 @@ TEST(EmitterProjector, MotionAcrossTheFrustumBorderIsRefused) {
         EXPECT_NE(msg.find("projector"), std::string::npos) << msg;
     }
 }
+
+// A floor strictly inside a projector's frustum (so no jump of the light crosses it) moving toward it: the
+// light it receives changes through the bilinear image lookup at uv(x) and the factor |q| / q.z³, all in the
+// interior term (the floor fills the view and casts no shadow).
+TEST(EmitterProjector, ReceiverMovingInsideTheFrustumMatchesFiniteDifferences) {
+    TempDir dir;
+    std::vector<Color3f> texels;
+    for (int i = 0; i < 16; ++i)
+        texels.push_back(Color3f(0.3f + 0.1f * (i % 4), 1.f - 0.05f * i, 0.2f + 0.04f * i));
+    const std::string tex = write_texture(dir, "grad.exr", 4, 4, texels);
+    auto s =
+        load_scene_string(scene(R"(<integrator type="path"><integer name="max_depth" value="2"/></integrator>
+<sensor type="perspective">
+    <float name="fov" value="40"/>
+    <transform name="to_world"><lookat origin="0, 1, 0.2" target="0, -1, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film>
+</sensor>
+<shape type="rectangle" id="floor">
+    <transform name="to_world"><rotate x="1" angle="-90"/><translate value="0, -1, 0"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf>
+</shape>
+<emitter type="projector" id="proj">
+    <float name="fov" value="100"/><float name="scale" value="2"/>
+    <transform name="to_world"><lookat origin="0.2, 1.5, 0" target="0.2, -1, 0" up="0, 0, 1"/></transform>
+    <texture type="bitmap" name="irradiance"><string name="filename" value=")" +
+                                tex + R"("/></texture>
+</emitter>)"));
+    EXPECT_FALSE(s->emitters[0]->emission_jumps_on(s->shapes[0]->mesh));
+    Parameters params(*s);
+    params.enable({parse_param_selection("floor.translate=0,1,0")});
+    const DerivativePair r = derivative_and_fd(*s, params, 4, 4, 1e-2);
+    const DiffCheck c =
+        check_against(r.derivative.derivative, r.derivative.stderr_img, r.fd.derivative, r.fd.stderr_img);
+    std::printf("  floor.translate=0,1,0 in the projector's light: %s\n", describe(c).c_str());
+    EXPECT_TRUE(c.passes()) << describe(c);
+    EXPECT_GT(std::abs(c.comparison.mean_ref), 1e-2);
+}
