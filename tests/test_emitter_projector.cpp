@@ -309,3 +309,51 @@ TEST(EmitterProjector, ReceiverMovingInsideTheFrustumMatchesFiniteDifferences) {
     EXPECT_TRUE(c.passes()) << describe(c);
     EXPECT_GT(std::abs(c.comparison.mean_ref), 1e-2);
 }
+
+// Light tracing starts paths with sample_ray (image-plane points uniform by area, weight pi scale E A): the
+// wall it lights must look as the path tracer's (sample_direction) does. The mean over the image of 16
+// independent light-tracing renders is compared within 4 standard errors.
+TEST(EmitterProjector, LightTracingAgreesWithPathTracing) {
+    TempDir dir;
+    std::vector<Color3f> texels;
+    for (int i = 0; i < 16; ++i)
+        texels.push_back(Color3f(0.3f + 0.1f * (i % 4), 1.f - 0.05f * i, 0.5f));
+    const std::string tex = write_texture(dir, "grad.exr", 4, 4, texels);
+    const std::string light =
+        R"(<emitter type="projector"><float name="fov" value="30"/><float name="scale" value="2"/>
+    <texture type="bitmap" name="irradiance"><string name="filename" value=")" +
+        tex + R"("/></texture></emitter>)";
+    std::string xml = wall_scene(light, 16);
+    auto path = load_scene_string(xml);
+    xml.replace(xml.find("\"path\""), 6, "\"ptracer\"");
+    auto ptracer = load_scene_string(xml);
+    const auto image_mean = [](const Image& img) {
+        double m = 0;
+        for (const Color3f& c : img.pixels)
+            m += c.x + c.y + c.z;
+        return m / (3.0 * img.pixels.size());
+    };
+    // Mean and standard error of the image mean over 16 independent renders.
+    const auto batched_mean = [&](const Scene& sc) {
+        double sum = 0, sum2 = 0;
+        const int batches = 16;
+        for (int b = 0; b < batches; ++b) {
+            RenderOptions o;
+            o.spp = 16;
+            o.seed = 100 + b;
+            const double m = image_mean(render(sc, o));
+            sum += m;
+            sum2 += m * m;
+        }
+        const double mean = sum / batches;
+        return std::pair{mean, std::sqrt((sum2 / batches - mean * mean) / (batches - 1))};
+    };
+    const auto [light_mean, light_se] = batched_mean(*ptracer);
+    const auto [path_mean, path_se] = batched_mean(*path);
+    std::printf("  image mean: light tracing %.6f +- %.6f, path tracing %.6f +- %.6f\n", light_mean, light_se,
+                path_mean, path_se);
+    EXPECT_NEAR(light_mean, path_mean, 4 * std::hypot(light_se, path_se));
+    const Emitter& e = *path->emitters[0];
+    EXPECT_NEAR(e.power().y, Pi * 2.f * 4.f * std::pow(std::tan(radians(15.f)), 2.f) * (1.f - 0.05f * 7.5f),
+                1e-4f);
+}
