@@ -357,3 +357,35 @@ TEST(EmitterProjector, LightTracingAgreesWithPathTracing) {
     EXPECT_NEAR(e.power().y, Pi * 2.f * 4.f * std::pow(std::tan(radians(15.f)), 2.f) * (1.f - 0.05f * 7.5f),
                 1e-4f);
 }
+
+// Mitsuba's field-of-view options (fov / fov_axis / focal_length, shared with the perspective camera), and
+// one-line errors with file:line naming the parameter.
+TEST(EmitterProjector, FieldOfViewOptionsAndErrors) {
+    const auto load_error = [](const std::string& body) {
+        try {
+            load_scene_string(scene(body + "\n<shape type=\"sphere\"/>"));
+        } catch (const LoadError& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    EXPECT_EQ(load_error(R"(<emitter type="projector"><rgb name="irradiance" value="1"/></emitter>)"), "");
+    EXPECT_EQ(load_error(R"(<emitter type="projector"><rgb name="irradiance" value="1"/>
+        <string name="focal_length" value="35mm"/></emitter>)"),
+              "");
+    EXPECT_EQ(load_error(R"(<emitter type="projector"><rgb name="irradiance" value="1"/>
+        <float name="fov" value="20"/><string name="fov_axis" value="diagonal"/></emitter>)"),
+              "");
+    const std::string missing = load_error(R"(<emitter type="projector"/>)");
+    EXPECT_NE(missing.find("irradiance"), std::string::npos) << missing;
+    const std::string fov = load_error(R"(<emitter type="projector"><rgb name="irradiance" value="1"/>
+        <float name="fov" value="180"/></emitter>)");
+    EXPECT_NE(fov.find(":3"), std::string::npos) << fov;
+    EXPECT_NE(fov.find("field of view"), std::string::npos) << fov;
+    const std::string scale = load_error(R"(<emitter type="projector"><rgb name="irradiance" value="1"/>
+        <float name="scale" value="-1"/></emitter>)");
+    EXPECT_NE(scale.find("scale"), std::string::npos) << scale;
+    const std::string unknown = load_error(R"(<emitter type="projector"><rgb name="irradiance" value="1"/>
+        <float name="cutoff_angle" value="3"/></emitter>)");
+    EXPECT_NE(unknown.find("cutoff_angle"), std::string::npos) << unknown;
+}
