@@ -43,8 +43,10 @@ struct Common {
 
 void add_common(CLI::App* cmd, Common& c, bool needs_params) {
     cmd->add_option("scene", c.scene, "scene file (Mitsuba 3 XML)")->required();
-    auto* p = cmd->add_option("--param", c.params,
-                              "parameter to differentiate, optionally with a direction: NAME[=v1,v2,...] (repeatable)");
+    auto* p = cmd->add_option(
+        "--param", c.params,
+        "parameter to differentiate, optionally with a direction: NAME[=v1,v2,...] (repeatable); "
+        "shape rotate/scale motions take a center: NAME@cx,cy,cz[=...]");
     if (needs_params) p->required();
     cmd->add_option("-D", c.defines, "override a <default> value: name=value");
     cmd->add_option("--spp", c.spp, "samples per pixel (in total)")->check(CLI::PositiveNumber);
@@ -165,10 +167,12 @@ void cmd_params(const Common& c) {
     Parameters params(*scene);
     std::printf("%-48s %10s  %s\n", "name", "size", "kind");
     for (const Parameter& p : params.all()) {
-        const char* kind = p.kind == Parameter::Kind::Data ? (p.geometry ? "geometry" : "value")
+        const char* kind = p.kind == Parameter::Kind::Data        ? (p.geometry ? "geometry" : "value")
                            : p.kind == Parameter::Kind::Translate ? "motion (direction: world vector)"
-                           : p.kind == Parameter::Kind::Rotate ? "motion (direction: world axis; radians)"
-                                                               : "motion (uniform scale)";
+                           : p.sensor                             ? "motion (direction: world axis; radians)"
+                           : p.kind == Parameter::Kind::Rotate
+                               ? "motion (direction: world axis; radians; NAME@cx,cy,cz: about that center)"
+                               : "motion (uniform scale; NAME@cx,cy,cz: about that center)";
         std::printf("%-48s %10d  %s\n", p.name.c_str(), p.size, kind);
     }
 }

@@ -73,10 +73,10 @@ const DocScene kScenes[] = {
     {"bsdf_thindielectric_glass.xml", "", ""},
     {"bsdf_twosided_cbox.xml", "", ""},
     {"bsdf_twosided_cbox_onesided.xml", "", ""},
-    {"emitter_projector_constant.xml", "emitter", "projector"},
-    {"emitter_projector_textured.xml", "emitter", "projector"},
+    {"emitter_projector_constant.xml", "", ""},
+    {"emitter_projector_textured.xml", "", ""},
     {"emitter_spot_no_texture.xml", "", ""},
-    {"emitter_spot_texture.xml", "parameter", "texture"}, // spot's projected texture is not implemented
+    {"emitter_spot_texture.xml", "", ""},
     {"integrator_aov.xml", "", ""},
     {"integrator_depth_1.xml", "", ""},
     {"integrator_depth_2.xml", "", ""},

@@ -19,6 +19,24 @@ Color3f incident(const Emitter& emitter, const SegmentSource& light, const Vec3f
     return emitter.eval(y) * (std::abs(dot(y.n, d)) / (dist2 * std::sqrt(dist2)));
 }
 
+// The boundary terms sample shadow edges, not jumps of the emitted light itself: refuses motions of a mesh
+// that such a jump crosses (a projector's frustum border, nearest-filtered projected texels).
+void check_emission_jumps(const Scene& scene, const Parameters& params) {
+    for (size_t i = 0; i < scene.shapes.size(); ++i) {
+        const Shape* shape = scene.shapes[i].get();
+        if (!params.moves(*shape)) continue;
+        for (const auto& emitter : scene.emitters)
+            if (emitter->emission_jumps_on(shape->mesh))
+                throw Error(
+                    "derivatives w.r.t. the motion of shape '" +
+                    (shape->id.empty() ? "shape_" + std::to_string(i) : shape->id) +
+                    "' are not supported: the light of the " + emitter->plugin + " emitter" +
+                    (emitter->id.empty() ? "" : " '" + emitter->id + "'") +
+                    " jumps across it (the border of its frustum or cone, or nearest-filtered texels), a "
+                    "boundary penumbra does not sample");
+    }
+}
+
 } // namespace
 
 BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edges, const MaterialForm& form, int t_min,
@@ -78,6 +96,7 @@ constexpr uint64_t Salt = 0x94D049BB133111EBULL;
 } // namespace
 
 Image DirectBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
+    check_emission_jumps(scene_, params);
     if (edges_.empty() || scene_.emitters.empty())
         return Image(scene_.sensor->film->width, scene_.sensor->film->height);
     const MaterialForm form(scene_, params, options.first_vertex);
@@ -88,6 +107,7 @@ Image DirectBoundary::derivative(const Parameters& params, const BoundaryOptions
 
 void DirectBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
                               std::vector<double>& gradient) const {
+    check_emission_jumps(scene_, params);
     if (edges_.empty() || scene_.emitters.empty()) return;
     const MaterialForm form(scene_, params, options.first_vertex);
     boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {

@@ -128,6 +128,9 @@ void Parameters::add_motions(Scene& scene) {
 const Parameter& Parameters::find(const std::string& name) const {
     for (const Parameter& p : all_)
         if (p.name == name) return p;
+    // Mitsuba names a constant's value `<owner>.<param>.value`; the shorter `<owner>.<param>` is an alias.
+    for (const Parameter& p : all_)
+        if (p.name == name + ".value") return p;
     std::vector<std::pair<size_t, std::string>> close;
     for (const Parameter& p : all_) close.emplace_back(edit_distance(name, p.name), p.name);
     std::sort(close.begin(), close.end());
@@ -150,10 +153,14 @@ void Parameters::disable_all() {
 void Parameters::enable(const std::vector<std::pair<std::string, std::vector<float>>>& selection) {
     disable_all();
     std::set<std::string> names;
-    for (const auto& [name, dir] : selection) {
+    for (const auto& [selected, dir] : selection) {
+        const auto [name, center] = split_motion_center(selected);
         const Parameter& p = find(name);
+        if (center && (p.sensor || (p.kind != Parameter::Kind::Rotate && p.kind != Parameter::Kind::Scale)))
+            throw Error("parameter '" + selected +
+                        "': a center (@x,y,z) applies to the rotate and scale motions of shapes");
         // A motion may be selected several times (e.g. the three axes of a translation), each with its own θ.
-        if (p.kind == Parameter::Kind::Data && !names.insert(name).second)
+        if (p.kind == Parameter::Kind::Data && !names.insert(p.name).second)
             throw Error("parameter '" + name + "' is selected twice");
         const int index = dimension_;
         enabled_.emplace_back(&p, index);
@@ -187,7 +194,7 @@ void Parameters::enable(const std::vector<std::pair<std::string, std::vector<flo
         if (p.sensor) {
             sensor_motions_.push_back(m);
         } else {
-            m.center = bbox_center(p.shape->mesh);
+            m.center = center ? *center : bbox_center(p.shape->mesh);
             shape_motions_[p.shape].push_back(m);
         }
     }
@@ -275,11 +282,12 @@ void Parameters::set_values(Scene& scene, const std::vector<float>& values) {
     saved_meshes_.clear();
 }
 
-std::pair<std::string, std::vector<float>> parse_param_selection(const std::string& text) {
-    const size_t eq = text.find('=');
-    std::pair<std::string, std::vector<float>> result{text.substr(0, eq), {}};
-    if (eq == std::string::npos) return result;
-    std::stringstream list(text.substr(eq + 1));
+namespace {
+
+// A comma-separated list of finite numbers; `context` names the option in errors.
+std::vector<float> parse_numbers(const std::string& text, const std::string& context) {
+    std::vector<float> out;
+    std::stringstream list(text);
     std::string item;
     while (std::getline(list, item, ',')) {
         size_t used = 0;
@@ -290,10 +298,28 @@ std::pair<std::string, std::vector<float>> parse_param_selection(const std::stri
             used = 0;
         }
         if (used == 0 || item.find_first_not_of(" \t", used) != std::string::npos || !std::isfinite(v))
-            throw Error("--param " + text + ": '" + item + "' is not a finite number");
-        result.second.push_back(v);
+            throw Error(context + ": '" + item + "' is not a finite number");
+        out.push_back(v);
     }
+    return out;
+}
+
+} // namespace
+
+std::pair<std::string, std::vector<float>> parse_param_selection(const std::string& text) {
+    const size_t eq = text.find('=');
+    std::pair<std::string, std::vector<float>> result{text.substr(0, eq), {}};
+    if (eq != std::string::npos) result.second = parse_numbers(text.substr(eq + 1), "--param " + text);
     return result;
+}
+
+std::pair<std::string, std::optional<Vec3f>> split_motion_center(const std::string& name) {
+    const size_t at = name.find('@');
+    if (at == std::string::npos) return {name, std::nullopt};
+    const std::vector<float> c = parse_numbers(name.substr(at + 1), "parameter '" + name + "'");
+    if (c.size() != 3)
+        throw Error("parameter '" + name + "': the center after '@' takes 3 numbers (e.g. @0,0,0)");
+    return {name.substr(0, at), Vec3f(c[0], c[1], c[2])};
 }
 
 } // namespace penumbra

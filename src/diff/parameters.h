@@ -1,18 +1,22 @@
 // Differentiable scene parameters: discovery with Mitsuba 3 `traverse` names, geometric motions, and the
 // selection of the parameters (and the direction in parameter space) that an estimator differentiates.
 //
-// Names: an object with an `id` is named by it; nested objects append the name their parent gives them
-// (`plane.bsdf.reflectance`, `light.emitter.radiance`); objects without an id at the top level are named
+// Names: Mitsuba 3's traverse() keys. An object with an `id` is named by it; nested objects append the name
+// their parent gives them (`plane.bsdf.reflectance.value`, `light.emitter.radiance.value`: a constant's value
+// is `value`, and find() also accepts the name without it); objects without an id at the top level are named
 // `<kind>_<n>` (e.g. `shape_2`). Shared objects are listed once, under their id.
 // Motions (virtual scalar parameters θ with value 0 in the reference configuration, paper 001 §4.1):
-//   <shape>.translate  x -> x + θ d                 (d: a world-space vector)
-//   <shape>.rotate     x -> c + R(a, θ)(x - c)      (a: world axis, c: the shape's bounding-box center; θ in radians)
-//   <shape>.scale      x -> c + (1 + θ)(x - c)      (uniform, about the bounding-box center)
-//   <sensor>.translate / <sensor>.rotate            the camera moves (world axes; rotation about its position)
+//   <shape>.translate  x -> x + θ d             (d: a world-space vector)
+//   <shape>.rotate     x -> c + R(a, θ)(x - c)  (a: world axis, θ in radians, c: the bounding-box center)
+//   <shape>.scale      x -> c + (1 + θ)(x - c)  (uniform, about the bounding-box center)
+//   <shape>.rotate@cx,cy,cz, <shape>.scale@cx,cy,cz: the same about the world point c (plane.scale@0,0,0
+//                      scales about the origin, as Mitsuba's tests do)
+//   <sensor>.translate / <sensor>.rotate        the camera moves (world axes; rotation about its position)
 #pragma once
 #include "scene/scene.h"
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -98,5 +102,8 @@ private:
 
 // Parses "name" or "name=v1,v2,..." (the CLI's --param syntax).
 std::pair<std::string, std::vector<float>> parse_param_selection(const std::string& text);
+// Splits a selected name "name@cx,cy,cz" into the parameter's name and the motion's center (none without
+// '@').
+std::pair<std::string, std::optional<Vec3f>> split_motion_center(const std::string& name);
 
 } // namespace penumbra

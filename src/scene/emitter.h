@@ -9,13 +9,14 @@
 namespace penumbra {
 
 class Shape;
+struct TriangleMesh;
 struct BoundingSphere {
     Vec3f center;
     float radius = 0.f;
 };
 
 enum EmitterFlags : uint32_t {
-    EmitterDeltaPosition = 1u << 0,  // point, spot
+    EmitterDeltaPosition = 1u << 0,  // point, spot, projector
     EmitterDeltaDirection = 1u << 1, // directional
     EmitterInfinite = 1u << 2,       // constant, envmap, directional
     EmitterSurface = 1u << 3,        // area
@@ -52,6 +53,10 @@ public:
     virtual void set_shape(const Shape* shape) { shape_ = shape; }
     virtual void set_scene_bounds(const BoundingSphere& bounds) { scene_bounds_ = bounds; }
     const Shape* shape() const { return shape_; }
+    // Whether the light this emitter casts on `mesh` can jump across the surface (a projector's frustum
+    // border, texel edges of a nearest-filtered projected texture, a spot without a falloff ring): a motion
+    // of the mesh moves such a jump in its material frame, a boundary the estimators do not sample.
+    virtual bool emission_jumps_on(const TriangleMesh&) const { return false; }
     // Total emitted power estimate (used to report; emitters are selected uniformly as in Mitsuba 3).
     virtual Color3f power() const { return Color3f(0.f); }
 

@@ -29,6 +29,8 @@ public:
     virtual bool is_constant() const { return false; }
     // Whether the value is continuous in uv (a checkerboard or a nearest-neighbour bitmap jumps).
     virtual bool is_continuous() const { return true; }
+    // Texels along u and v (Mitsuba's resolution(): 1 x 1 for textures that are not images).
+    virtual Vec2i resolution() const { return {1, 1}; }
 };
 
 // CRTP helper: a texture implements `template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>&) const`.

@@ -82,10 +82,11 @@ MicrofacetType parse_distribution(const Properties& props) {
 RoughnessParams parse_roughness(const Properties& props) {
     RoughnessParams r;
     r.type = parse_distribution(props);
-    if (props.has("alpha")) {
+    // As Mitsuba: isotropic (one texture, traverse key `alpha`) unless alpha_u or alpha_v is given.
+    if (props.has("alpha") || !(props.has("alpha_u") || props.has("alpha_v"))) {
         if (props.has("alpha_u") || props.has("alpha_v"))
             props.raise("alpha", "specify either \"alpha\" or \"alpha_u\"/\"alpha_v\", not both");
-        r.alpha_u = r.alpha_v = props.get_texture("alpha");
+        r.alpha_u = r.alpha_v = props.get_texture("alpha", Color3f(0.1f));
     } else {
         r.alpha_u = props.get_texture("alpha_u", Color3f(0.1f));
         r.alpha_v = props.get_texture("alpha_v", Color3f(0.1f));

@@ -3,6 +3,7 @@
 // | name     | type     | default | meaning                              |
 // |----------|----------|---------|--------------------------------------|
 // | radiance | spectrum | 1       | emitted radiance (W m^-2 sr^-1)      |
+#include "core/param.h"
 #include "core/warp.h"
 #include "scene/emitters/emitters.h"
 
@@ -51,7 +52,9 @@ public:
         return T(Inv4Pi);
     }
     template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>&) const { return Color3<T>(T(0)); }
-    template <typename T> Color3<T> eval_environment_t(const Vec3<T>&) const { return Color3<T>(radiance_); }
+    template <typename T> Color3<T> eval_environment_t(const Vec3<T>&) const {
+        return param_color<T>(radiance_, index_);
+    }
 
     // Power entering the bounding sphere: pi * 4 pi r^2 * L.
     Color3f power() const override {
@@ -65,8 +68,12 @@ public:
         return os.str();
     }
 
+    // Mitsuba's key (its radiance is a texture).
+    void traverse(ParamVisitor& v) override { v.put("radiance.value", &radiance_.x, 3, &index_); }
+
 private:
     Color3f radiance_;
+    int index_ = -1;
 };
 
 } // namespace

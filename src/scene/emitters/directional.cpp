@@ -68,7 +68,7 @@ public:
 
     // Eq. 27 of paper 001: the irradiance E arriving along the light's direction (visibility is tested apart).
     template <typename T> Color3<T> eval_delta_t(const Vec3<T>&) const { return param_color<T>(irradiance_, index_); }
-    void traverse(ParamVisitor& v) override { v.put("irradiance", &irradiance_.x, 3, &index_); }
+    void traverse(ParamVisitor& v) override { v.put("irradiance.value", &irradiance_.x, 3, &index_); }
 
 private:
     int index_ = -1;

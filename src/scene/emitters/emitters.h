@@ -12,6 +12,7 @@ namespace penumbra {
 std::shared_ptr<Emitter> make_area_emitter(const Properties& props);
 std::shared_ptr<Emitter> make_point_emitter(const Properties& props);
 std::shared_ptr<Emitter> make_spot_emitter(const Properties& props);
+std::shared_ptr<Emitter> make_projector_emitter(const Properties& props);
 std::shared_ptr<Emitter> make_directional_emitter(const Properties& props);
 std::shared_ptr<Emitter> make_constant_emitter(const Properties& props);
 std::shared_ptr<Emitter> make_envmap_emitter(const Properties& props, const LoadContext& ctx);

@@ -19,6 +19,7 @@
 // warp instead; both are unbiased. Solid-angle pdf = pdf_uv / (2 pi^2 sin(theta)).
 #include "core/distribution.h"
 #include "core/image.h"
+#include "core/param.h"
 #include "core/warp.h"
 #include "scene/emitters/emitters.h"
 
@@ -113,6 +114,13 @@ public:
         return integral * (Pi * r * r);
     }
 
+    // Mitsuba's keys. The sampling density stays the one built at load time: estimates stay unbiased as long
+    // as the radiance is zero wherever that density is.
+    void traverse(ParamVisitor& v) override {
+        v.put("scale", &scale_, 1, &scale_index_);
+        v.put("data", &image_.pixels[0].x, 3 * int(image_.pixels.size()), &data_index_);
+    }
+
     std::string to_string() const override {
         std::ostringstream os;
         os << "EnvmapEmitter[resolution = " << image_.width << "x" << image_.height << ", scale = " << scale_ << "]";
@@ -146,6 +154,11 @@ private:
     }
 
     const Color3f& pixel(int x, int y) const { return image_.at(x % image_.width, y); }
+    // A pixel as a parameter (`data`: 3 values per pixel, row by row).
+    template <typename T> Color3<T> texel(int x, int y) const {
+        const int i = y * image_.width + x % image_.width;
+        return param_color<T>(image_.pixels[size_t(i)], data_index_ < 0 ? -1 : data_index_ + 3 * i);
+    }
     Color3f corner_mean(int i, int j) const {
         return (pixel(i, j) + pixel(i + 1, j) + pixel(i, j + 1) + pixel(i + 1, j + 1)) * 0.25f;
     }
@@ -160,9 +173,9 @@ private:
         const int ix = std::clamp(int(detach(x)), 0, w - 1);
         const int iy = std::clamp(int(detach(y)), 0, h - 2);
         const T fx = x - T(float(ix)), fy = y - T(float(iy));
-        const Color3<T> c0 = Color3<T>(pixel(ix, iy)) * (T(1) - fx) + Color3<T>(pixel(ix + 1, iy)) * fx;
-        const Color3<T> c1 = Color3<T>(pixel(ix, iy + 1)) * (T(1) - fx) + Color3<T>(pixel(ix + 1, iy + 1)) * fx;
-        return (c0 * (T(1) - fy) + c1 * fy) * T(scale_);
+        const Color3<T> c0 = texel<T>(ix, iy) * (T(1) - fx) + texel<T>(ix + 1, iy) * fx;
+        const Color3<T> c1 = texel<T>(ix, iy + 1) * (T(1) - fx) + texel<T>(ix + 1, iy + 1) * fx;
+        return (c0 * (T(1) - fy) + c1 * fy) * param_value<T>(scale_, scale_index_);
     }
 
     // Cell weights: mean corner luminance (minus the MIS-compensation offset) times sin(theta) at the cell center.
@@ -197,6 +210,7 @@ private:
 
     Image image_;
     float scale_;
+    int scale_index_ = -1, data_index_ = -1;
     Transform to_world_, to_local_;
     Distribution2D distribution_;
 };

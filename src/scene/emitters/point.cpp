@@ -48,7 +48,7 @@ public:
     template <typename T> Color3<T> eval_delta_t(const Vec3<T>& p) const {
         return param_color<T>(intensity_, index_) / squared_norm(Vec3<T>(position_) - p);
     }
-    void traverse(ParamVisitor& v) override { v.put("intensity", &intensity_.x, 3, &index_); }
+    void traverse(ParamVisitor& v) override { v.put("intensity.value", &intensity_.x, 3, &index_); }
 
 private:
     int index_ = -1;

@@ -17,8 +17,6 @@
 
 namespace penumbra {
 
-namespace {
-
 // Mitsuba's parse_fov(): the horizontal field of view in degrees.
 float parse_x_fov(const Properties& props, double aspect) {
     if (props.has("fov") && props.has("focal_length"))
@@ -62,6 +60,8 @@ float parse_x_fov(const Properties& props, double aspect) {
                     "the horizontal field of view must be in (0, 180) degrees");
     return float(result);
 }
+
+namespace {
 
 // Mitsuba's Transform::has_scale(): the linear part is not orthonormal (M M^T != I within 1e-3).
 bool has_scale(const Transform& t) {

@@ -10,6 +10,10 @@ namespace penumbra {
 // sampler with their defaults); see sensors/factory.cpp for the table.
 void load_sensor_common(Sensor& sensor, const Properties& props, const LoadContext& ctx);
 
+// Mitsuba's parse_fov(): the horizontal field of view in degrees from fov / fov_axis / focal_length for an
+// image of the given aspect (W / H); also used by the projector emitter.
+float parse_x_fov(const Properties& props, double aspect);
+
 // The sensor plugins, one per file of this directory; make_sensor (factory.cpp) dispatches on `type`.
 std::shared_ptr<Sensor> make_perspective_sensor(const Properties& props, const LoadContext& ctx);
 std::shared_ptr<Sensor> make_orthographic_sensor(const Properties& props, const LoadContext& ctx);

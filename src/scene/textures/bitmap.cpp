@@ -85,6 +85,7 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
 
     Color3f mean() const override { return mean_; }
     bool is_continuous() const override { return bilinear_; }
+    Vec2i resolution() const override { return {image_.width, image_.height}; }
     std::string to_string() const override {
         return "BitmapTexture[" + name_ + ", " + std::to_string(image_.width) + "x" +
                std::to_string(image_.height) + "]";

@@ -17,7 +17,7 @@ class ConstantTexture final : public TextureBase<ConstantTexture> {
     template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>&) const {
         return param_color<T>(value_, index_);
     }
-    void traverse(ParamVisitor& v) override { v.put("", &value_.x, 3, &index_); }
+    void traverse(ParamVisitor& v) override { v.put("value", &value_.x, 3, &index_); }
     Color3f mean() const override { return value_; }
     bool is_constant() const override { return true; }
     std::string to_string() const override {
