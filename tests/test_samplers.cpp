@@ -2,6 +2,7 @@
 // set of samples; determinism; loading; unbiasedness and variance against `independent` on a direct-lighting
 // image; thread-count independence of a render.
 #include "core/sampler.h"
+#include "diff_check.h"
 #include "render_stats.h"
 #include "scene/scene.h"
 
@@ -342,5 +343,37 @@ TEST(Samplers, RenderIsIndependentOfThreadCount) {
         ASSERT_EQ(one.pixels.size(), two.pixels.size());
         EXPECT_EQ(std::memcmp(one.pixels.data(), two.pixels.data(), one.pixels.size() * sizeof(Color3f)), 0)
             << name;
+    }
+}
+
+// The interior derivative estimator draws its per-pixel numbers from the scene's sampler: with a stratified
+// or low-discrepancy sampler its derivative still matches central finite differences (same checks and
+// tolerances as tests/test_diff_interior.cpp; the glossy plane and lights of that file's scene, no visibility
+// change).
+TEST(Samplers, InteriorDerivativeMatchesFiniteDifferences) {
+    for (const char* name : {"multijitter", "ldsampler"}) {
+        auto scene = load_scene_string(std::string(R"(<scene version="3.0.0">
+      <integrator type="path"><integer name="max_depth" value="3"/></integrator>
+      <sensor type="perspective" id="cam"><float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0,0.5,3" target="0,0,0" up="0,1,0"/></transform>
+        <sampler type=")") + name + R"("/>
+        <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/></film></sensor>
+      <shape type="rectangle" id="plane"><transform name="to_world"><scale value="5"/></transform>
+        <bsdf type="roughconductor" id="mat"><float name="alpha" value="0.3"/>
+          <string name="distribution" value="ggx"/></bsdf></shape>
+      <shape type="rectangle" id="light"><transform name="to_world"><scale value="1.2"/><rotate x="1" angle="135"/>
+          <translate value="-0.5,2.6,1.5"/></transform>
+        <emitter type="area"><rgb name="radiance" value="0.6, 0.45, 0.3"/></emitter></shape>
+      <emitter type="point" id="bulb"><point name="position" value="0.5,0.8,1.2"/><rgb name="intensity" value="3"/></emitter>
+    </scene>)");
+        Parameters params(*scene);
+        params.enable({parse_param_selection("mat.alpha")});
+        const DerivativePair r = derivative_and_fd(*scene, params, 16, 32, 1e-2);
+        const DiffCheck c =
+            check_against(r.derivative.derivative, r.derivative.stderr_img, r.fd.derivative, r.fd.stderr_img);
+        std::printf("  %s: %s\n", name, describe(c).c_str());
+        EXPECT_TRUE(c.passes()) << name << ": " << describe(c);
+        EXPECT_GT(std::abs(c.comparison.mean_ref), 1e-4)
+            << name << ": the reference derivative is ~0, a weak test";
     }
 }
