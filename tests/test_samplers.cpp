@@ -368,7 +368,7 @@ TEST(Samplers, InteriorDerivativeMatchesFiniteDifferences) {
     </scene>)");
         Parameters params(*scene);
         params.enable({parse_param_selection("mat.alpha")});
-        const DerivativePair r = derivative_and_fd(*scene, params, 16, 32, 1e-2);
+        const DerivativePair r = derivative_and_fd(*scene, params, 16, 64, 1e-2);
         const DiffCheck c =
             check_against(r.derivative.derivative, r.derivative.stderr_img, r.fd.derivative, r.fd.stderr_img);
         std::printf("  %s: %s\n", name, describe(c).c_str());

@@ -21,7 +21,7 @@ inline uint32_t sub_seed(uint32_t seed, uint32_t k) {
     return h ^ (h >> 16);
 }
 
-// A pseudo-random permutation π(i) of [0, n) chosen by `seed` (n ≤ 2^24): cycle walking over rounds of
+// A pseudo-random permutation π(i) of [0, n) chosen by `seed` (n < 2^31): cycle walking over rounds of
 // bijections of the enclosing power-of-two range (xor / add a key, multiply by an odd constant, xor-shift),
 // the construction of Kensler's permute() (2013, Listing 3) with rounds of our own. Cheap: no hashing per
 // round.
@@ -40,7 +40,11 @@ inline uint32_t shuffle(uint32_t i, uint32_t n, uint32_t seed) {
         i = ((i + (k1 >> 9)) * 0x5bd1e995u) & mask;
         i ^= i >> half;
     } while (i >= n);
-    return i;
+    // A rotation by a seeded offset makes every π(i) uniform over [0, n) across seeds (the rounds above alone
+    // favour some values when n is not a power of two): each sample's strata are then uniformly distributed,
+    // which is what makes the stratified estimators unbiased.
+    const uint32_t offset = uint32_t((uint64_t(sub_seed(seed, 0x51ed)) * n) >> 32);
+    return uint32_t((uint64_t(i) + offset) % n);
 }
 
 // Jittered 1D stratification: slot m of n lands in stratum π(m) of [0,1) (π a permutation chosen by `seed`).
@@ -114,7 +118,8 @@ inline uint32_t nested_scramble(uint32_t v, uint32_t seed) {
     v ^= v * 0x91e10da4u;
     v += seed * 0x9E3779B9u;
     v ^= v * 0x7feb352cu;
-    return van_der_corput(v);
+    // A final random digit flip (also nested) makes the scrambled value uniform across seeds.
+    return van_der_corput(v) ^ sub_seed(seed, 0x5c4a);
 }
 
 // Point `i` of the randomized (0,2)-sequence: van der Corput and Sobol' second dimension, each
