@@ -23,8 +23,8 @@ inline uint32_t sub_seed(uint32_t seed, uint32_t k) {
 
 // A pseudo-random permutation π(i) of [0, n) chosen by `seed` (n < 2^31): cycle walking over rounds of
 // bijections of the enclosing power-of-two range (xor / add a key, multiply by an odd constant, xor-shift),
-// the construction of Kensler's permute() (2013, Listing 3) with rounds of our own. Cheap: no hashing per
-// round.
+// the construction of Kensler's permute() ("Correlated Multi-Jittered Sampling", 2013) with rounds of our
+// own. Cheap: no hashing per round.
 inline uint32_t shuffle(uint32_t i, uint32_t n, uint32_t seed) {
     if (n <= 1) return 0;
     const uint32_t bits = 32u - uint32_t(__builtin_clz(n - 1)), mask = (1u << bits) - 1u,
@@ -58,7 +58,7 @@ inline Vec2f stratified_grid_2d(uint32_t m, uint32_t r, uint32_t seed, const Vec
     return Vec2f((float(cell % r) + jitter.x) / float(r), (float(cell / r) + jitter.y) / float(r));
 }
 
-// Correlated multi-jittered sampling (Kensler 2013, Listing 3 idea): slot m of n = cols × rows sits in cell
+// Correlated multi-jittered sampling (Kensler 2013): slot m of n = cols × rows sits in cell
 // (i, j) = (s mod cols, s div cols) of the canonical arrangement, s = π(m); within its cell it occupies
 // sub-column σ_x(j) and sub-row σ_y(i), one permutation each shared by all cells (the "correlated" variant).
 // The points are stratified in the cols × rows grid and in n strata along each axis.
@@ -71,13 +71,13 @@ inline Vec2f multijitter_2d(uint32_t m, uint32_t cols, uint32_t rows, uint32_t s
 }
 
 // Column c ∈ [0, p] of the Bose orthogonal array OA(p², p + 1, p, 2) (Bose 1938; Jarosz et al. 2019,
-// Sec. 4.1) at row (a0, a1) ∈ [0,p)²: a0 + c·a1 mod p for c < p, and a1 for c = p. Any two columns are
-// orthogonal: their value pairs run over all p² combinations once.
+// "Orthogonal Array Sampling for Monte Carlo Rendering") at row (a0, a1) ∈ [0,p)²: a0 + c·a1 mod p for c < p,
+// and a1 for c = p. Any two columns are orthogonal: their value pairs run over all p² combinations once.
 inline uint32_t bose_column(uint32_t a0, uint32_t a1, uint32_t c, uint32_t p) {
     return c == p ? a1 : (a0 + c * a1) % p;
 }
 
-// Dimension d ≤ p of a strength-2 orthogonal-array sample (Jarosz et al. 2019, Sec. 5, multi-jittered
+// Dimension d ≤ p of a strength-2 orthogonal-array sample (Jarosz et al. 2019, multi-jittered
 // flavour): the stratum is column d, the sub-stratum the next column d + 1 (mod p + 1), each permuted per
 // dimension, so every dimension is stratified in p² intervals and every pair of dimensions in a p × p grid.
 inline float orthogonal_1d(uint32_t row, uint32_t p, uint32_t d, uint32_t seed, float jitter) {

@@ -7,8 +7,6 @@
 #include "core/rng.h"
 #include "core/vector.h"
 
-#include <string>
-
 namespace penumbra {
 
 // The largest number of samples per pixel a sampler accepts.
