@@ -38,9 +38,13 @@ int cmd_render(const std::string& scene_path, const std::string& output, int spp
         write_image(output, layers.front().image);
     }
     const Film& film = *scene->sensor->film;
-    const int used_spp = spp > 0 ? spp : scene->sensor->sampler->sample_count;
-    std::fprintf(stderr, "rendered %dx%d at %d spp in %.2f s (%.2f M samples/s, %.2f M rays/s) -> %s\n", film.width,
-                 film.height, used_spp, stats.seconds, stats.samples / stats.seconds * 1e-6,
+    const SamplerDesc& sampler = *scene->sensor->sampler;
+    const int used_spp = sampler.effective_spp(spp);
+    if (spp > 0 && used_spp != spp)
+        std::fprintf(stderr, "note: the %s sampler rounds --spp %d to %d\n", sampler_type_name(sampler.type), spp,
+                     used_spp);
+    std::fprintf(stderr, "rendered %dx%d at %d spp (%s) in %.2f s (%.2f M samples/s, %.2f M rays/s) -> %s\n",
+                 film.width, film.height, used_spp, sampler_type_name(sampler.type), stats.seconds, stats.samples / stats.seconds * 1e-6,
                  stats.rays / stats.seconds * 1e-6, output.c_str());
     if (stats.dropped_samples > 0)
         std::fprintf(stderr, "warning: %llu samples had non-finite values and were dropped\n",
@@ -52,8 +56,9 @@ int cmd_info(const std::string& scene_path, const std::vector<std::string>& defi
     auto scene = load_scene(scene_path, parse_defines(defines));
     std::printf("scene %s\n", scene_path.c_str());
     const Film& film = *scene->sensor->film;
-    std::printf("sensor: %s, film %dx%d, rfilter %s, %d spp\n", scene->sensor->plugin.c_str(), film.width,
-                film.height, film.rfilter->plugin.c_str(), scene->sensor->sampler->sample_count);
+    std::printf("sensor: %s, film %dx%d, rfilter %s, %d spp (%s)\n", scene->sensor->plugin.c_str(), film.width,
+                film.height, film.rfilter->plugin.c_str(), scene->sensor->sampler->sample_count,
+                sampler_type_name(scene->sensor->sampler->type));
     if (scene->integrator) std::printf("integrator: %s\n", scene->integrator->plugin.c_str());
     std::printf("shapes: %zu (%zu triangles)\n", scene->shapes.size(), scene->triangle_count());
     for (const auto& s : scene->shapes) {

@@ -91,10 +91,10 @@ const DocScene kScenes[] = {
     {"medium_homogeneous_sss_textured.xml", "volume", "gridvolume"},
     {"sampler_independent_16spp.xml", "", ""},
     {"sampler_independent_25spp.xml", "", ""},
-    {"sampler_ldsampler_16spp.xml", "sampler", "ldsampler"},
-    {"sampler_multijitter_16spp.xml", "sampler", "multijitter"},
-    {"sampler_orthogonal_25spp.xml", "sampler", "orthogonal"},
-    {"sampler_stratified_16spp.xml", "sampler", "stratified"},
+    {"sampler_ldsampler_16spp.xml", "", ""},
+    {"sampler_multijitter_16spp.xml", "", ""},
+    {"sampler_orthogonal_25spp.xml", "", ""},
+    {"sampler_stratified_16spp.xml", "", ""},
     // These two lack the <path value="../../common"/> of the others, so (as in Mitsuba) their meshes are not
     // found.
     {"sensor_orthographic.xml", "file", "meshes/matpreview.serialized"},

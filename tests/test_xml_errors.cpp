@@ -212,8 +212,8 @@ TEST(XmlErrors, LoaderRejectsWhatPenumbraCannotRender) {
         "<string>:3: hg: the asymmetry parameter 'g' must lie in (-1, 1)");
     EXPECT_CONTAINS(load_error(scene("<bsdf type=\"twosided\" id=\"loop\">\n<ref id=\"loop\"/></bsdf>")),
                     "<string>:2: circular reference: bsdf 'loop'");
-    EXPECT_EQ(load_error(scene("<sensor type=\"perspective\"><sampler type=\"stratified\"/></sensor>")),
-              "<string>:2: unsupported sampler plugin 'stratified'");
+    EXPECT_EQ(load_error(scene("<sensor type=\"perspective\"><sampler type=\"halton\"/></sensor>")),
+              "<string>:2: unsupported sampler plugin 'halton'");
     // An area emitter only makes sense attached to the shape that emits.
     EXPECT_EQ(load_error(scene("<emitter type=\"area\"/>")),
               "<string>:2: an area emitter must be attached to a shape (nest it in the <shape>, or <ref> it from one)");

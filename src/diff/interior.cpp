@@ -106,7 +106,7 @@ PixelSums forward_batch(const Scene& scene, const Parameters& params, const Diff
     const bool antithetic = options.antithetic && !form.image_space_first_vertex();
     const PathSettings settings = options.path;
     for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
-        Sampler sampler;
+        Sampler sampler(*scene.sensor->sampler, antithetic ? (options.spp + 1) / 2 : options.spp);
         RayCounter rays;
         uint64_t tape_nodes = 0;
         std::vector<float> tangent;
@@ -181,7 +181,7 @@ Gradient render_gradient(const Scene& scene, const Parameters& params, const Ima
     SharedSampleCost cost;
 
     for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
-        Sampler sampler;
+        Sampler sampler(*scene.sensor->sampler, antithetic ? (options.spp + 1) / 2 : options.spp);
         RayCounter rays;
         uint64_t tape_nodes = 0;
         std::vector<float> scratch;

@@ -105,7 +105,7 @@ void ParticleTracer::trace(const Scene& scene, Sampler& sampler, Image& image, R
 // summed in chunk order: the image is bit-identical for a given seed whatever the thread count.
 std::vector<Layer> ParticleTracer::render(const Scene& scene, const RenderOptions& options, RenderStats& stats) const {
     const Film& film = *scene.sensor->film;
-    const int spp = options.spp > 0 ? options.spp : scene.sensor->sampler->sample_count;
+    const int spp = scene.sensor->sampler->effective_spp(options.spp);
     const uint64_t n_paths = uint64_t(film.width) * film.height * spp;
     constexpr int n_chunks = 16;
     std::vector<Image> chunks(n_chunks, Image(film.width, film.height));

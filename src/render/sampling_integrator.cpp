@@ -6,14 +6,14 @@
 
 namespace penumbra {
 
-// Every pixel is estimated independently from its own RNG streams (seed, pixel, sample index) and written by
-// exactly one task, so the image does not depend on scheduling or thread count.
+// Every pixel is estimated from the scene sampler's numbers, a pure function of (seed, pixel, sample index,
+// dimension), and written by exactly one task, so the image does not depend on scheduling or thread count.
 std::vector<Layer> SamplingIntegrator::render(const Scene& scene, const RenderOptions& options,
                                               RenderStats& stats) const {
     const Sensor& sensor = *scene.sensor;
     const Film& film = *sensor.film;
     const int width = film.width, height = film.height;
-    const int spp = options.spp > 0 ? options.spp : sensor.sampler->sample_count;
+    const int spp = sensor.sampler->effective_spp(options.spp);
     const std::vector<std::string> names = layer_names();
     const size_t n_layers = names.size();
     std::vector<Layer> layers;
@@ -22,7 +22,7 @@ std::vector<Layer> SamplingIntegrator::render(const Scene& scene, const RenderOp
     const auto start = std::chrono::steady_clock::now();
 
     for_each_tile(width, height, options.threads, [&](int x0, int y0, int x1, int y1) {
-        Sampler sampler;
+        Sampler sampler(*sensor.sampler, spp);
         RayCounter counter;
         std::vector<Color3f> value(n_layers), sum(n_layers);
         uint64_t local_dropped = 0;

@@ -1,6 +1,5 @@
-// Factories for the sampler, participating media and phase functions (Mitsuba 3 parameters and defaults).
+// Factories for participating media and phase functions (Mitsuba 3 parameters and defaults).
 //
-// sampler "independent":  sample_count (integer, 4), seed (integer, 0)
 // medium "homogeneous":   albedo (float/spectrum, 0.75), sigma_t (float/spectrum, 1), scale (float, 1),
 //                         sample_emitters (boolean, true), has_spectral_extinction (boolean, true),
 //                         one nested phase (default isotropic)
@@ -8,19 +7,8 @@
 // phase "hg":             g (float, 0.8), Henyey-Greenstein asymmetry in (-1, 1)
 #include "scene/factory.h"
 #include "scene/medium.h"
-#include "scene/sensor.h"
 
 namespace penumbra {
-
-std::shared_ptr<Object> make_sampler(const Properties& props, const LoadContext&) {
-    if (props.plugin() != "independent") throw_unsupported_plugin(props, ObjectKind::Sampler);
-    auto sampler = std::make_shared<SamplerDesc>();
-    const int64_t count = props.get_int("sample_count", 4);
-    if (count < 1) props.raise("sample_count", "'sample_count' must be at least 1");
-    sampler->sample_count = int(count);
-    sampler->seed = uint64_t(props.get_int("seed", 0));
-    return sampler;
-}
 
 std::shared_ptr<Object> make_phase(const Properties& props, const LoadContext&) {
     auto phase = std::make_shared<PhaseFunction>();

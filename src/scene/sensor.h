@@ -5,17 +5,11 @@
 #include "core/transform.h"
 #include "scene/film.h"
 #include "scene/interaction.h"
+#include "scene/sampler.h"
 
 #include <memory>
 
 namespace penumbra {
-
-class SamplerDesc : public Object {
-public:
-    ObjectKind kind() const override { return ObjectKind::Sampler; }
-    int sample_count = 4;
-    uint64_t seed = 0;
-};
 
 class Sensor : public Object {
 public:
