@@ -20,26 +20,26 @@ bool moves_geometry(const Scene& scene, const Parameters& params) {
     return false;
 }
 
-std::string aperture_note(const Scene& scene) {
-    return scene.sensor->plugin + " sensor with aperture_radius " +
-           std::to_string(scene.sensor->aperture_radius());
+std::string viewpoint_note(const Scene& scene) {
+    return scene.sensor->plugin +
+           " sensor (no single film position per point: a finite aperture or a single ray)";
 }
 
 } // namespace
 
 bool image_space_first_vertex(const Scene& scene, const Parameters& params, FirstVertex choice) {
     const bool camera_moves = !params.sensor_motions().empty();
-    if (scene.sensor->aperture_radius() > 0.f) {
+    if (!scene.sensor->projects_points()) {
         if (choice == FirstVertex::Material)
             throw Error("the material-form first vertex needs a single center of projection, not a " +
-                        aperture_note(scene) + " (use --first-vertex image)");
+                        viewpoint_note(scene) + " (use --first-vertex image)");
         if (camera_moves)
-            throw Error("derivatives of a moving " + aperture_note(scene) + " are not supported");
+            throw Error("derivatives of a moving " + viewpoint_note(scene) + " are not supported");
         for (const auto& shape : scene.shapes)
             if (params.moves(*shape) &&
                 has_texture(*shape, [](const Texture& t) { return !t.is_continuous(); }))
                 throw Error(
-                    "with a " + aperture_note(scene) +
+                    "with a " + viewpoint_note(scene) +
                     ", a moving shape with a texture that jumps inside its triangles is not supported");
         return true;
     }
@@ -53,9 +53,9 @@ bool image_space_first_vertex(const Scene& scene, const Parameters& params, Firs
 }
 
 void require_pinhole(const Scene& scene, const Parameters& params, const std::string& term) {
-    if (scene.sensor->aperture_radius() > 0.f && moves_geometry(scene, params))
+    if (!scene.sensor->projects_points() && moves_geometry(scene, params))
         throw Error(
-            "the " + term + " boundary term does not support a " + aperture_note(scene) +
+            "the " + term + " boundary term does not support a " + viewpoint_note(scene) +
             " (it connects points to a single center of projection); run the interior term only, or use a "
             "perspective sensor");
 }

@@ -10,11 +10,11 @@
 // Both give the same derivative (docs/design.md, "The first vertex"); image space has far less variance,
 // material form is needed when the camera moves, and is kept where a moving surface's shading jumps inside a
 // triangle (checkerboard or nearest-neighbour textures), which image space would have to sample as edges.
-// With a finite lens aperture (thinlens) a world point has no single film position: s(x1) and the film
-// Jacobian of the material form do not exist, while the ray fixed by the film and lens samples does, so the
-// first vertex is in image space (the interior term is then exact), and the terms that connect points to the
-// camera through film_position() (primary, direct and indirect boundary terms) are refused for parameters
-// that move geometry.
+// With a finite lens aperture (thinlens) or a single measured ray (radiancemeter), a world point has no
+// single film position (Sensor::projects_points() is false): s(x1) and the film Jacobian of the material form
+// do not exist, while the ray fixed by the film and lens samples does, so the first vertex is in image space
+// (the interior term is then exact), and the terms that connect points to the camera through film_position()
+// (primary, direct and indirect boundary terms) are refused for parameters that move geometry.
 #pragma once
 #include "diff/parameters.h"
 
@@ -29,11 +29,11 @@ FirstVertex parse_first_vertex(const std::string& name);
 
 // Whether the estimators use the image-space first vertex for these parameters: Auto picks it unless the
 // sensor moves or a moving shape has a texture that jumps inside its triangles. Requesting ImageSpace when
-// the sensor moves is an Error; so is, with a finite aperture, Material, a moving sensor, or a moving shape
-// whose texture jumps inside its triangles.
+// the sensor moves is an Error; so is, for a sensor that does not project points, Material, a moving sensor,
+// or a moving shape whose texture jumps inside its triangles.
 bool image_space_first_vertex(const Scene& scene, const Parameters& params, FirstVertex choice);
 
-// Throws Error when the sensor has a finite aperture and the parameters move geometry: the boundary term
+// Throws Error when the sensor does not project points and the parameters move geometry: the boundary term
 // `term` connects surface points to a single center of projection.
 void require_pinhole(const Scene& scene, const Parameters& params, const std::string& term);
 

@@ -26,9 +26,10 @@ public:
     std::shared_ptr<SamplerDesc> sampler;
     float near_clip = 1e-2f, far_clip = 1e4f;
 
-    // Radius of a finite lens aperture (thinlens); 0 for cameras with a single center of projection, for
-    // which a world point has one film position and film_position() / to_sensor() are exact.
-    virtual float aperture_radius() const { return 0.f; }
+    // Whether every world point has one film position, so that film_position() and to_sensor() are exact (a
+    // single center of projection: pinhole, orthographic, thinlens with aperture 0); false for a finite lens
+    // aperture (thinlens) and for a single measured ray (radiancemeter).
+    virtual bool projects_points() const { return true; }
 
     // Primary ray through continuous film position `film_pos` (pixels, [0,W]x[0,H]) and lens point
     // `aperture_sample` (unused by pinholes); weight is 1 for the projective cameras.

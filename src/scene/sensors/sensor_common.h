@@ -16,6 +16,7 @@ void load_sensor_common(Sensor& sensor, const Properties& props, const LoadConte
 std::shared_ptr<Sensor> make_perspective_sensor(const Properties& props, const LoadContext& ctx);
 std::shared_ptr<Sensor> make_orthographic_sensor(const Properties& props, const LoadContext& ctx);
 std::shared_ptr<Sensor> make_thinlens_sensor(const Properties& props, const LoadContext& ctx);
+std::shared_ptr<Sensor> make_radiancemeter_sensor(const Properties& props, const LoadContext& ctx);
 
 // Mitsuba's parse_fov() (fov, fov_axis or focal_length): the horizontal field of view in degrees
 // (sensors/fov.cpp).

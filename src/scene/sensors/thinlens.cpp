@@ -35,7 +35,7 @@ class ThinLensCamera final : public SensorBase<ThinLensCamera, PerspectiveProjec
         origin_ = to_world.apply_point(Vec3f(0.f));
     }
 
-    float aperture_radius() const override { return aperture_radius_; }
+    bool projects_points() const override { return aperture_radius_ == 0.f; }
 
     std::pair<Ray, Color3f> sample_ray(const Vec2f& film_pos, const Vec2f& aperture_sample) const override {
         const Vec2f disk = warp::square_to_uniform_disk_concentric(aperture_sample) * aperture_radius_;
