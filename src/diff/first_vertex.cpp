@@ -22,7 +22,7 @@ bool moves_geometry(const Scene& scene, const Parameters& params) {
 
 std::string viewpoint_note(const Scene& scene) {
     return scene.sensor->plugin +
-           " sensor (no single film position per point: a finite aperture or a single ray)";
+           (scene.sensor->plugin == "thinlens" ? " sensor with a finite aperture" : " sensor");
 }
 
 } // namespace
@@ -54,10 +54,9 @@ bool image_space_first_vertex(const Scene& scene, const Parameters& params, Firs
 
 void require_pinhole(const Scene& scene, const Parameters& params, const std::string& term) {
     if (!scene.sensor->projects_points() && moves_geometry(scene, params))
-        throw Error(
-            "the " + term + " boundary term does not support a " + viewpoint_note(scene) +
-            " (it connects points to a single center of projection); run the interior term only, or use a "
-            "perspective sensor");
+        throw Error("the " + term +
+                    " boundary term connects points to a single center of projection, which a " +
+                    viewpoint_note(scene) + " does not have: use --method interior, or a perspective sensor");
 }
 
 } // namespace penumbra
