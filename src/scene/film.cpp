@@ -6,9 +6,9 @@
 //   pixel_format      string   rgb       rgb | rgba (penumbra writes RGB either way)
 //   component_format  string   float16   float16 | float32 | uint32 (penumbra writes float32)
 //   sample_border     boolean  false     (true is not supported)
-//   crop_offset_x/y   integer  0, 0      top-left pixel of the rendered crop window in the full frame
-//   crop_width/height integer  width - crop_offset_x, height - crop_offset_y   size of the crop window (the
-//   image) rfilter           nested   gaussian
+//   crop_offset_x/y   integer  0, 0      top-left pixel of the crop window (the image) in the full frame
+//   crop_width/height integer  the rest  size of the crop window (default: to the frame's right/bottom edge)
+//   rfilter           nested   gaussian
 // box:      radius 0.5 (fixed)                       f(x) = 1 for |x| < 1/2 (1/2 at |x| = 1/2)
 // tent:     radius float 1                           f(x) = max(0, 1 - |x| / radius)
 // gaussian: stddev float 0.5, radius = 4 stddev      f(x) = max(0, exp(-x^2 / (2 stddev^2)) - exp(-radius^2 /

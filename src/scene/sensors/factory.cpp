@@ -2,8 +2,8 @@
 // bases):
 //   to_world                     transform  identity
 //   near_clip, far_clip          float      0.01, 10000
-//   focus_distance               float      far_clip   (used by thinlens; pinhole and orthographic cameras
-//   ignore it) shutter_open, shutter_close  float      0, 0       (accepted; penumbra renders static scenes)
+//   focus_distance               float      far_clip   (thinlens; the other sensors ignore it)
+//   shutter_open, shutter_close  float      0, 0       (accepted; penumbra renders static scenes)
 //   film                         nested     hdrfilm with its defaults
 //   sampler                      nested     independent with its defaults
 #include "scene/sensors/sensor_common.h"

@@ -2,18 +2,18 @@
 // field).
 //
 // Parameters (plus the common sensor parameters, see sensors/factory.cpp):
-//   aperture_radius           float   --      lens aperture radius in scene units (required; >= 0)
-//   focus_distance            float   far_clip distance from the aperture to the plane in focus, along local
-//   +z fov, fov_axis, focal_length               as for `perspective` (sensors/fov.cpp)
-//   principal_point_offset_x  float   0       as for `perspective` (a penumbra extension: Mitsuba's thinlens
-//   principal_point_offset_y  float   0       has no principal point offset)
+//   aperture_radius           float  --        lens aperture radius in scene units (required; >= 0)
+//   focus_distance            float  far_clip  distance from the lens to the plane in focus, along local +z
+//   fov, fov_axis, focal_length              as for `perspective` (sensors/fov.cpp)
+//   principal_point_offset_x  float  0         as for `perspective` (a penumbra extension: Mitsuba's
+//   principal_point_offset_y  float  0         thinlens has no principal point offset)
 //
 // A primary ray (Mitsuba's ThinLensCamera::sample_ray): the aperture point a = r · concentric_disk(u) on the
 // lens plane z = 0 and the point f = focus_distance · q(s) of the plane in focus that the film position s
 // images (q(s) on z = 1, see PerspectiveProjection), d = normalize(f − a); the ray starts at the near clip
 // plane and its weight is 1. Points on the plane in focus therefore image exactly as with a pinhole; a point
-// at depth z spreads over a circle of confusion of radius r |z − focus_distance| / z in the units of the
-// plane z = 1.
+// at depth z spreads over a uniform disk (circle of confusion) of radius r |z − F| / (z F) on the plane
+// z = 1, F = focus_distance.
 #include "scene/sensors/sensor_common.h"
 
 #include "core/warp.h"
