@@ -116,3 +116,68 @@ TEST(CamMeters, RadianceMeterDerivativeOfReflectance) {
     p.interior = o;
     EXPECT_THROW(psdr_derivative(*scene, params, p), Error);
 }
+
+namespace {
+
+std::string irradiance_scene(const std::string& extra, const std::string& meter_film = "") {
+    return R"(<scene version="3.0.0"><integrator type="path"><integer name="max_depth" value="2"/></integrator>
+      <shape type="disk" id="probe"><transform name="to_world"><scale value="0.01"/><translate value="0,0,1"/></transform>
+        <sensor type="irradiancemeter">)" +
+           meter_film + R"(</sensor></shape>)" + extra + "</scene>";
+}
+
+const char* OnePixel =
+    R"(<film type="hdrfilm"><integer name="width" value="1"/><integer name="height" value="1"/></film>)";
+
+} // namespace
+
+// Mitsuba's normalization: E = (1/A) ∫ ∫ L cos θ dω dA. Under a constant environment L: E = π L; a
+// cosine-weighted direction and weight π make every sample read exactly π L (the default gaussian rfilter is
+// replaced by the box that makes the film sample a uniform direction sample).
+TEST(CamMeters, IrradianceMeterUnderAConstantEnvironmentReadsPiL) {
+    auto scene = load_scene_string(irradiance_scene(
+        R"(<emitter type="constant"><rgb name="radiance" value="0.3,0.5,0.7"/></emitter>)", OnePixel));
+    EXPECT_EQ(scene->sensor->plugin, "irradiancemeter");
+    EXPECT_EQ(scene->sensor->film->rfilter->plugin, "box");
+    const BatchStats s = render_batches(*scene, 16, 64);
+    for (int k = 0; k < 3; ++k) {
+        const float L = k == 0 ? 0.3f : k == 1 ? 0.5f : 0.7f;
+        // Every ray escapes to the environment and reads π L (standard error 0): float roundoff.
+        EXPECT_NEAR(s.mean.at(0, 0)[k], Pi * L, 1e-5f * L);
+    }
+    std::printf("  irradiance under L = (0.3, 0.5, 0.7): (%.5f, %.5f, %.5f) +- (%.2g, %.2g, %.2g), pi L = "
+                "(%.5f, %.5f, %.5f)\n",
+                s.mean.at(0, 0).x, s.mean.at(0, 0).y, s.mean.at(0, 0).z, s.stderr_img.at(0, 0).x,
+                s.stderr_img.at(0, 0).y, s.stderr_img.at(0, 0).z, Pi * 0.3f, Pi * 0.5f, Pi * 0.7f);
+}
+
+// A disk light of radius R and radiance L facing the probe from height h: E = π L R² / (R² + h²) (its
+// projected solid angle). (A point light reads 0, as in Mitsuba: the meter's rays start at the probe and only
+// surfaces they hit sample lights.)
+TEST(CamMeters, IrradianceMeterUnderADiskLight) {
+    auto scene = load_scene_string(
+        irradiance_scene(R"(<shape type="disk"><transform name="to_world"><rotate x="1" angle="180"/>
+        <translate value="0,0,2"/></transform><emitter type="area"><rgb name="radiance" value="2"/></emitter></shape>)",
+                         OnePixel));
+    const BatchStats s = render_batches(*scene, 16, 4096);
+    const double expected = Pi * 2.0 * 1.0 / (1.0 + 1.0); // R = 1, h = 1
+    // 4 standard errors of 16 batches; the disk light is a 256-triangle fan (its area is 0.01% below π R²).
+    EXPECT_NEAR(s.mean.at(0, 0).x, expected, 4 * s.stderr_img.at(0, 0).x + 1e-3 * expected);
+    EXPECT_LT(s.stderr_img.at(0, 0).x, 0.01 * expected) << "the test has power";
+    std::printf("  irradiance under a disk light: %.5f +- %.5f, expected %.5f\n", s.mean.at(0, 0).x,
+                s.stderr_img.at(0, 0).x, expected);
+}
+
+TEST(CamMeters, IrradianceMeterErrors) {
+    // Its film must have one pixel; other sensors cannot be nested in a shape; one sensor per scene.
+    EXPECT_THROW(load_scene_string(irradiance_scene("")), LoadError); // the default 768x576 film
+    const std::string nested_camera =
+        R"(<scene version="3.0.0"><shape type="disk"><sensor type="perspective"/></shape></scene>)";
+    try {
+        load_scene_string(nested_camera);
+        FAIL();
+    } catch (const LoadError& e) {
+        EXPECT_NE(std::string(e.what()).find("irradiancemeter"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(load_scene_string(irradiance_scene(R"(<sensor type="perspective"/>)", OnePixel)), LoadError);
+}

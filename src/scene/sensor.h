@@ -11,6 +11,8 @@
 
 namespace penumbra {
 
+class Shape;
+
 class SamplerDesc : public Object {
 public:
     ObjectKind kind() const override { return ObjectKind::Sampler; }
@@ -30,6 +32,10 @@ public:
     // single center of projection: pinhole, orthographic, thinlens with aperture 0); false for a finite lens
     // aperture (thinlens) and for a single measured ray (radiancemeter).
     virtual bool projects_points() const { return true; }
+    // Attaches the sensor to the shape it is nested in (irradiancemeter); the other sensors cannot be nested.
+    virtual void attach_to(const Shape&) {
+        throw LoadError(location, plugin + ": only an irradiancemeter can be nested in a shape");
+    }
 
     // Primary ray through continuous film position `film_pos` (pixels, [0,W]x[0,H]) and lens point
     // `aperture_sample` (unused by pinholes); weight is 1 for the projective cameras.

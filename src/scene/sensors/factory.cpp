@@ -58,6 +58,7 @@ std::shared_ptr<Object> make_sensor(const Properties& props, const LoadContext& 
     if (type == "orthographic") return make_orthographic_sensor(props, ctx);
     if (type == "thinlens") return make_thinlens_sensor(props, ctx);
     if (type == "radiancemeter") return make_radiancemeter_sensor(props, ctx);
+    if (type == "irradiancemeter") return make_irradiancemeter_sensor(props, ctx);
     throw_unsupported_plugin(props, ObjectKind::Sensor);
 }
 

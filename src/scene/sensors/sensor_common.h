@@ -17,6 +17,7 @@ std::shared_ptr<Sensor> make_perspective_sensor(const Properties& props, const L
 std::shared_ptr<Sensor> make_orthographic_sensor(const Properties& props, const LoadContext& ctx);
 std::shared_ptr<Sensor> make_thinlens_sensor(const Properties& props, const LoadContext& ctx);
 std::shared_ptr<Sensor> make_radiancemeter_sensor(const Properties& props, const LoadContext& ctx);
+std::shared_ptr<Sensor> make_irradiancemeter_sensor(const Properties& props, const LoadContext& ctx);
 
 // Mitsuba's parse_fov() (fov, fov_axis or focal_length): the horizontal field of view in degrees
 // (sensors/fov.cpp).
