@@ -1,4 +1,4 @@
-// Sensors: perspective (pinhole), thinlens and orthographic cameras and the radiancemeter, Mitsuba 3
+// Sensors: perspective (pinhole), thinlens and orthographic cameras, radiance and irradiance meters, Mitsuba 3
 // conventions (camera looks along local +z, local +x is left, film origin at the top-left corner of the
 // image, which is the film's crop window).
 #pragma once
@@ -30,7 +30,7 @@ public:
 
     // Whether every world point has one film position, so that film_position() and to_sensor() are exact (a
     // single center of projection: pinhole, orthographic, thinlens with aperture 0); false for a finite lens
-    // aperture (thinlens) and for a single measured ray (radiancemeter).
+    // aperture (thinlens), a single measured ray (radiancemeter) and a shape's irradiance (irradiancemeter).
     virtual bool projects_points() const { return true; }
     // Attaches the sensor to the shape it is nested in (irradiancemeter); the other sensors cannot be nested.
     virtual void attach_to(const Shape&) {
