@@ -1,6 +1,6 @@
-// Sensors: perspective (pinhole), thinlens and orthographic cameras, radiance and irradiance meters, Mitsuba 3
-// conventions (camera looks along local +z, local +x is left, film origin at the top-left corner of the
-// image, which is the film's crop window).
+// Sensors: perspective (pinhole), thinlens and orthographic cameras, radiance and irradiance meters;
+// Mitsuba's conventions (camera looks along local +z, local +x is left, film origin at the top-left corner of
+// the image, which is the film's crop window).
 #pragma once
 #include "core/scalar.h"
 #include "core/transform.h"
