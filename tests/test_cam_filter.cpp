@@ -125,7 +125,8 @@ TEST(CamFilm, DefaultsAndValidation) {
     EXPECT_EQ(film->rfilter->radius(), 0.5f);
 
     Properties crop("hdrfilm", {"scene.xml", 4});
-    crop.set("crop_width", int64_t(100), {"scene.xml", 12});
+    crop.set("crop_offset_x", int64_t(700), {"scene.xml", 11});
+    crop.set("crop_width", int64_t(100), {"scene.xml", 12}); // 700 + 100 > 768
     try {
         make_film(crop, ctx);
         FAIL();

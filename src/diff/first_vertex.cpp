@@ -11,8 +11,38 @@ FirstVertex parse_first_vertex(const std::string& name) {
     throw Error("unknown first-vertex form '" + name + "' (expected auto, image or material)");
 }
 
+namespace {
+
+bool moves_geometry(const Scene& scene, const Parameters& params) {
+    if (!params.sensor_motions().empty()) return true;
+    for (const auto& shape : scene.shapes)
+        if (params.moves(*shape)) return true;
+    return false;
+}
+
+std::string viewpoint_note(const Scene& scene) {
+    return scene.sensor->plugin +
+           (scene.sensor->plugin == "thinlens" ? " sensor with a finite aperture" : " sensor");
+}
+
+} // namespace
+
 bool image_space_first_vertex(const Scene& scene, const Parameters& params, FirstVertex choice) {
     const bool camera_moves = !params.sensor_motions().empty();
+    if (!scene.sensor->projects_points()) {
+        if (choice == FirstVertex::Material)
+            throw Error("the material-form first vertex needs a single center of projection, not a " +
+                        viewpoint_note(scene) + " (use --first-vertex image)");
+        if (camera_moves)
+            throw Error("derivatives of a moving " + viewpoint_note(scene) + " are not supported");
+        for (const auto& shape : scene.shapes)
+            if (params.moves(*shape) &&
+                has_texture(*shape, [](const Texture& t) { return !t.is_continuous(); }))
+                throw Error(
+                    "with a " + viewpoint_note(scene) +
+                    ", a moving shape with a texture that jumps inside its triangles is not supported");
+        return true;
+    }
     if (choice == FirstVertex::ImageSpace && camera_moves)
         throw Error("the image-space first vertex needs a static camera: the sensor moves (use --first-vertex material)");
     if (choice != FirstVertex::Auto) return choice == FirstVertex::ImageSpace;
@@ -20,6 +50,13 @@ bool image_space_first_vertex(const Scene& scene, const Parameters& params, Firs
     for (const auto& shape : scene.shapes)
         if (params.moves(*shape) && has_texture(*shape, [](const Texture& t) { return !t.is_continuous(); })) return false;
     return true;
+}
+
+void require_pinhole(const Scene& scene, const Parameters& params, const std::string& term) {
+    if (!scene.sensor->projects_points() && moves_geometry(scene, params))
+        throw Error("the " + term +
+                    " boundary term connects points to a single center of projection, which a " +
+                    viewpoint_note(scene) + " does not have: use --method interior, or a perspective sensor");
 }
 
 } // namespace penumbra

@@ -35,6 +35,14 @@ void boundary_batches(const Scene& scene, const Parameters& params, const PsdrOp
     if (B > 1) stderr_img = batches.standard_error();
 }
 
+// The primary, direct and indirect boundary terms connect surface points to a single center of projection:
+// with a finite aperture they are refused for parameters that move geometry (diff/first_vertex.h).
+void require_pinhole_terms(const Scene& scene, const Parameters& params, const PsdrOptions& options) {
+    if (options.primary_spp > 0) require_pinhole(scene, params, "primary");
+    if (options.direct_spp > 0) require_pinhole(scene, params, "direct");
+    if (options.indirect_spp > 0) require_pinhole(scene, params, "indirect");
+}
+
 // The boundary terms of a scene with their budgets and seeds; the discontinuity edges are collected once.
 class BoundaryTerms {
 public:
@@ -66,6 +74,7 @@ private:
 } // namespace
 
 PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, const PsdrOptions& options) {
+    require_pinhole_terms(scene, params, options);
     PsdrDerivative out;
     const Film& film = *scene.sensor->film;
     if (options.interior.spp > 0) {
@@ -111,6 +120,7 @@ PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, con
 
 Gradient psdr_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const PsdrOptions& options) {
     const auto start = std::chrono::steady_clock::now();
+    require_pinhole_terms(scene, params, options);
     Gradient g;
     if (options.interior.spp > 0) g = render_gradient(scene, params, adjoint, options.interior);
     else g.values.assign(size_t(params.dimension()), 0.0);

@@ -6,7 +6,8 @@
 //   pixel_format      string   rgb       rgb | rgba (penumbra writes RGB either way)
 //   component_format  string   float16   float16 | float32 | uint32 (penumbra writes float32)
 //   sample_border     boolean  false     (true is not supported)
-//   crop_offset_x/y, crop_width/height   (only the full frame is supported)
+//   crop_offset_x/y   integer  0, 0      top-left pixel of the crop window (the image) in the full frame
+//   crop_width/height integer  the rest  size of the crop window (default: to the frame's right/bottom edge)
 //   rfilter           nested   gaussian
 // box:      radius 0.5 (fixed)                       f(x) = 1 for |x| < 1/2 (1/2 at |x| = 1/2)
 // tent:     radius float 1                           f(x) = max(0, 1 - |x| / radius)
@@ -63,8 +64,11 @@ Vec2f ReconstructionFilter::sample(const Vec2f& u) const {
 
 std::string Film::to_string() const {
     std::ostringstream os;
-    os << "HDRFilm[" << width << "x" << height << ", rfilter=" << (rfilter ? rfilter->to_string() : "none")
-       << "]";
+    os << "HDRFilm[" << width << "x" << height;
+    if (!(full_size == Vec2i(width, height)))
+        os << " crop of " << full_size.x << "x" << full_size.y << " at (" << crop_offset.x << ", "
+           << crop_offset.y << ")";
+    os << ", rfilter=" << (rfilter ? rfilter->to_string() : "none") << "]";
     return os.str();
 }
 
@@ -156,17 +160,20 @@ std::shared_ptr<Object> make_film(const Properties& props, const LoadContext& ct
     check_choice("component_format", "float16", {"float16", "float32", "uint32"});
     if (props.get_bool("sample_border", false))
         props.raise("sample_border", "sample_border=true is not supported");
-    const bool full_frame = props.get_int("crop_offset_x", 0) == 0 &&
-                            props.get_int("crop_offset_y", 0) == 0 &&
-                            props.get_int("crop_width", film->width) == film->width &&
-                            props.get_int("crop_height", film->height) == film->height;
-    if (!full_frame) {
-        const char* name = props.has("crop_offset_x")   ? "crop_offset_x"
-                           : props.has("crop_offset_y") ? "crop_offset_y"
-                           : props.has("crop_width")    ? "crop_width"
-                                                        : "crop_height";
-        props.raise(name, "crop windows are not supported (only the full frame can be rendered)");
-    }
+    // Mitsuba's Film: the crop window must lie inside the full frame.
+    film->full_size = Vec2i(film->width, film->height);
+    film->crop_offset = Vec2i(int(props.get_int("crop_offset_x", 0)), int(props.get_int("crop_offset_y", 0)));
+    film->width = int(props.get_int("crop_width", film->full_size.x - film->crop_offset.x));
+    film->height = int(props.get_int("crop_height", film->full_size.y - film->crop_offset.y));
+    if (film->crop_offset.x < 0 || film->crop_offset.x >= film->full_size.x)
+        props.raise("crop_offset_x", "crop_offset_x must be in [0, width)");
+    if (film->crop_offset.y < 0 || film->crop_offset.y >= film->full_size.y)
+        props.raise("crop_offset_y", "crop_offset_y must be in [0, height)");
+    if (film->width <= 0 || film->crop_offset.x + film->width > film->full_size.x)
+        props.raise("crop_width", "crop_width must be positive and crop_offset_x + crop_width at most width");
+    if (film->height <= 0 || film->crop_offset.y + film->height > film->full_size.y)
+        props.raise("crop_height",
+                    "crop_height must be positive and crop_offset_y + crop_height at most height");
 
     const auto filters = props.objects(ObjectKind::RFilter);
     if (filters.size() > 1) throw LoadError(filters[1]->location, "hdrfilm: more than one rfilter given");

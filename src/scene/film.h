@@ -46,7 +46,11 @@ public:
 class Film : public Object {
 public:
     ObjectKind kind() const override { return ObjectKind::Film; }
+    // The image: width x height pixels. With a crop window (Mitsuba's crop_offset_x/y, crop_width/height) the
+    // image is the crop and shows the region of the full_size frame at crop_offset; sensors project onto the
+    // full frame, and film positions (pixels) are relative to the image's top-left corner.
     int width = 768, height = 576;
+    Vec2i full_size{768, 576}, crop_offset{0, 0};
     std::shared_ptr<ReconstructionFilter> rfilter;
     std::string to_string() const override;
 };

@@ -102,6 +102,13 @@ void add_shape(Scene& scene, const std::shared_ptr<Object>& obj) {
         shape->emitter->set_shape(shape.get());
         scene.emitters.push_back(shape->emitter);
     }
+    if (shape->sensor) {
+        if (scene.sensor)
+            throw LoadError(shape->sensor->location,
+                            "a second sensor (penumbra renders one sensor; the first is at " +
+                                scene.sensor->location.str() + ")");
+        scene.sensor = shape->sensor;
+    }
 }
 
 std::unique_ptr<Scene> build_scene(const XmlScene& xml, const std::string& source_path) {

@@ -11,6 +11,7 @@
 namespace penumbra {
 
 class Medium;
+class Sensor;
 
 class Shape : public Object {
 public:
@@ -21,6 +22,7 @@ public:
     std::shared_ptr<BSDF> bsdf;
     std::shared_ptr<Emitter> emitter; // area emitter, or null
     std::shared_ptr<Medium> interior, exterior;
+    std::shared_ptr<Sensor> sensor;   // a nested sensor measuring the shape (irradiancemeter), or null
     bool face_normals = false;        // ignore per-vertex normals
     int vertex_param_index = -1;      // first parameter index of vertex_positions when differentiated
 

@@ -19,13 +19,14 @@
 //  all         to_world         transform  identity
 //              flip_normals     bool       false
 //              nested bsdf (at most one; default: diffuse), area emitter (at most one),
-//              interior / exterior medium
+//              interior / exterior medium, sensor (irradiancemeter, at most one)
 //
 // Loaded meshes without vertex normals get smooth ones (Mitsuba 3 recomputes them unless face_normals is
 // set). Primitives are tessellated: the sphere as 64 x 128 (theta x phi) quads, the disk as a 256-triangle
 // fan.
 #include "scene/factory.h"
 #include "scene/medium.h"
+#include "scene/sensor.h"
 #include "scene/shape.h"
 #include "scene/shapes/instance.h"
 #include "scene/shapes/shapes.h"
@@ -139,6 +140,8 @@ std::shared_ptr<Object> make_shape(const Properties& props, const LoadContext& c
 
     shape->finalize();
     if (shape->emitter) shape->emitter->set_shape(shape.get());
+    shape->sensor = at_most_one<Sensor>(props, ObjectKind::Sensor, "sensor");
+    if (shape->sensor) shape->sensor->attach_to(*shape);
     return shape;
 }
 

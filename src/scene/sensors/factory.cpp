@@ -2,7 +2,7 @@
 // bases):
 //   to_world                     transform  identity
 //   near_clip, far_clip          float      0.01, 10000
-//   focus_distance               float      far_clip   (accepted; pinhole and orthographic cameras ignore it)
+//   focus_distance               float      far_clip   (thinlens; the other sensors ignore it)
 //   shutter_open, shutter_close  float      0, 0       (accepted; penumbra renders static scenes)
 //   film                         nested     hdrfilm with its defaults
 //   sampler                      nested     independent with its defaults
@@ -56,6 +56,9 @@ std::shared_ptr<Object> make_sensor(const Properties& props, const LoadContext& 
     const std::string& type = props.plugin();
     if (type == "perspective") return make_perspective_sensor(props, ctx);
     if (type == "orthographic") return make_orthographic_sensor(props, ctx);
+    if (type == "thinlens") return make_thinlens_sensor(props, ctx);
+    if (type == "radiancemeter") return make_radiancemeter_sensor(props, ctx);
+    if (type == "irradiancemeter") return make_irradiancemeter_sensor(props, ctx);
     throw_unsupported_plugin(props, ObjectKind::Sensor);
 }
 
