@@ -6,12 +6,24 @@
 //   wrap_mode    string     repeat      repeat | mirror | clamp
 //   raw          boolean    false       true: keep 8-bit values as stored (no sRGB -> linear decoding)
 //   to_uv        transform  none        affine map applied to the uv coordinates first
+//   format       string     auto        auto | variant | fp16: fp16 rounds the texels to half precision; auto
+//   and
+//                                       variant keep float32 (Mitsuba's auto stores <= 16-bit sources as
+//                                       half, a rounding of at most 2^-11 relative that penumbra does not
+//                                       reproduce)
+//   accel        boolean    true        accepted; it selects CUDA texture hardware in Mitsuba, nothing on the
+//   CPU
+//
+// traverse(): `data`, the texels (linear RGB, row-major from the top row), differentiable.
 //
 // Uv convention (as Mitsuba): (u, v) = (0, 0) is the top-left corner of the image, u to the right, v down;
 // texel (i, j) covers [i, i+1]/W x [j, j+1]/H. Mitsuba's mesh loaders flip v (v = 1 - v_obj) so that OBJ uvs,
 // whose v points up, address the image the usual way.
 #include "core/image.h"
+#include "core/param.h"
 #include "scene/textures/textures.h"
+
+#include <Imath/half.h>
 
 #include <cmath>
 
@@ -33,8 +45,8 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
     }
 
     // Bilinear: f(u W - 1/2, v H - 1/2) interpolated between the four nearest texel centers; nearest: the
-    // texel containing (u W, v H). Texel values are constants; derivatives flow through the interpolation
-    // weights.
+    // texel containing (u W, v H). Derivatives flow through the interpolation weights (uv) and the texels
+    // (`data`).
     template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>& si) const {
         const T u = si.uv.x * to_uv_[0] + si.uv.y * to_uv_[1] + T(to_uv_[2]);
         const T v = si.uv.x * to_uv_[3] + si.uv.y * to_uv_[4] + T(to_uv_[5]);
@@ -42,19 +54,20 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
         if (!bilinear_) {
             const int x = wrap(int(std::floor(detach(u) * float(w))), w);
             const int y = wrap(int(std::floor(detach(v) * float(h))), h);
-            return Color3<T>(image_.at(x, y));
+            return texel<T>(x, y);
         }
         const T px = u * float(w) - T(0.5f), py = v * float(h) - T(0.5f);
         const int x0 = int(std::floor(detach(px))), y0 = int(std::floor(detach(py)));
         const T wx = px - T(float(x0)), wy = py - T(float(y0));
         const int xa = wrap(x0, w), xb = wrap(x0 + 1, w), ya = wrap(y0, h), yb = wrap(y0 + 1, h);
-        const Color3<T> top =
-            Color3<T>(image_.at(xa, ya)) * (T(1.f) - wx) + Color3<T>(image_.at(xb, ya)) * wx;
-        const Color3<T> bottom =
-            Color3<T>(image_.at(xa, yb)) * (T(1.f) - wx) + Color3<T>(image_.at(xb, yb)) * wx;
+        const Color3<T> top = texel<T>(xa, ya) * (T(1.f) - wx) + texel<T>(xb, ya) * wx;
+        const Color3<T> bottom = texel<T>(xa, yb) * (T(1.f) - wx) + texel<T>(xb, yb) * wx;
         return top * (T(1.f) - wy) + bottom * wy;
     }
 
+    void traverse(ParamVisitor& v) override {
+        v.put("data", &image_.pixels[0].x, int(image_.pixels.size() * 3), &index_);
+    }
     Color3f mean() const override { return mean_; }
     bool is_continuous() const override { return bilinear_; }
     std::string to_string() const override {
@@ -63,6 +76,11 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
     }
 
   private:
+    // Texel (x, y); as a parameter its channels are data[3 (y W + x) + c].
+    template <typename T> Color3<T> texel(int x, int y) const {
+        return param_color<T>(image_.at(x, y), index_ < 0 ? -1 : index_ + 3 * (y * image_.width + x));
+    }
+
     // Maps an integer texel index into [0, n) according to the wrap mode (mirror has period 2n: ... 1 0 | 0 1
     // ...).
     int wrap(int i, int n) const {
@@ -85,6 +103,7 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
     std::array<float, 6> to_uv_;
     std::string name_;
     Color3f mean_;
+    int index_ = -1;
 };
 
 } // namespace
@@ -109,6 +128,11 @@ std::shared_ptr<Texture> make_bitmap_texture(const Properties& props, const Load
         props.raise("wrap_mode",
                     "invalid wrap_mode '" + wrap_name + "' (expected 'repeat', 'mirror' or 'clamp')");
 
+    const std::string format = props.get_string("format", "auto");
+    if (format != "auto" && format != "variant" && format != "fp16")
+        props.raise("format", "invalid format '" + format + "' (expected 'auto', 'variant' or 'fp16')");
+    props.get_bool("accel", true);
+
     const bool raw = props.get_bool("raw", false);
     const auto to_uv = uv_affine(props.get_transform("to_uv"));
     Image image;
@@ -118,6 +142,10 @@ std::shared_ptr<Texture> make_bitmap_texture(const Properties& props, const Load
         throw LoadError(props.location("filename"), e.what());
     }
     if (image.pixels.empty()) props.raise("filename", "image '" + path + "' is empty");
+    if (format == "fp16")
+        for (Color3f& c : image.pixels)
+            for (int k = 0; k < 3; ++k)
+                c[k] = float(half(c[k]));
     return std::make_shared<BitmapTexture>(std::move(image), filter == "bilinear", wrap, to_uv, filename);
 }
 
