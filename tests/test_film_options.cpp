@@ -335,6 +335,14 @@ TEST(FilmOptions, MomentIntegrator) {
     for (const Layer& l : aov_layers)
         names.push_back(l.name);
     EXPECT_EQ(names, (std::vector<std::string>{"", "a.dd", "a", "m2_a.dd", "m2_a"}));
+    EXPECT_EQ(aov_layers[1].channels, "T"); // Mitsuba's depth channel: a.dd.T
+    EXPECT_EQ(aov_layers[3].channels, "T");
+    TempDir dir;
+    write_film(dir.str() + "/moment.exr", *with_aov->sensor->film, aov_layers);
+    const ExrFile exr = read_exr_channels(dir.str() + "/moment.exr");
+    for (const char* channel : {"R", "a.dd.T", "a.X", "a.Z", "m2_a.dd.T", "m2_a.Y"})
+        EXPECT_TRUE(exr.types.count(channel)) << channel;
+    EXPECT_EQ(exr.types.size(), 3u + 1u + 3u + 1u + 3u);
     EXPECT_THROW(load_scene_string(scene(R"(<integrator type="moment"/>)")), LoadError);
 }
 
