@@ -1,7 +1,7 @@
 // `penumbra render` and `penumbra info`.
 #include "cli.h"
 
-#include "core/exr_layers.h"
+#include "render/film_output.h"
 #include "render/integrator.h"
 #include "render/render.h"
 #include "scene/scene.h"
@@ -30,14 +30,8 @@ int cmd_render(const std::string& scene_path, const std::string& output, int spp
     RenderStats stats;
     const std::vector<Layer> layers = render_layers(*scene, options, &stats);
 
-    if (ext == ".exr" && layers.size() > 1) {
-        std::vector<std::pair<std::string, const Image*>> out;
-        for (const Layer& l : layers) out.emplace_back(l.name, &l.image);
-        write_exr_layers(output, out);
-    } else {
-        write_image(output, layers.front().image);
-    }
     const Film& film = *scene->sensor->film;
+    write_film(output, film, layers);
     const SamplerDesc& sampler = *scene->sensor->sampler;
     const int used_spp = sampler.effective_spp(spp);
     if (spp > 0 && used_spp != spp)

@@ -134,7 +134,7 @@ TEST(CamFilm, DefaultsAndValidation) {
         EXPECT_NE(std::string(e.what()).find("scene.xml:12"), std::string::npos) << e.what();
     }
     Properties bad_format("hdrfilm", {"scene.xml", 4});
-    bad_format.set("pixel_format", std::string("xyz"), {"scene.xml", 13});
+    bad_format.set("pixel_format", std::string("xyzw"), {"scene.xml", 13});
     EXPECT_THROW(make_film(bad_format, ctx), LoadError);
     EXPECT_THROW(make_film(Properties("specfilm", {"scene.xml", 4}), ctx), LoadError);
 }

@@ -1,7 +1,12 @@
 // Textures: bitmap lookups (uv convention, filters, wrap modes, sRGB), checkerboard pattern, constant.
 #include "core/image.h"
+#include "diff/parameters.h"
+#include "diff_check.h"
 #include "scene/factory.h"
+#include "scene/scene.h"
+#include "scene/shape.h"
 #include "scene/texture.h"
+#include "xml_test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -172,4 +177,158 @@ TEST(CamTexture, ConstantAndUnsupported) {
     EXPECT_NEAR(c->eval_1(si), 0.2f, 1e-7f); // mean of the channels, float roundoff
     LoadContext ctx;
     EXPECT_THROW(make_texture(Properties("wavelet", {"scene.xml", 9}), ctx), LoadError);
+}
+
+// rawconstant: the value as given (negative or above 1 too: no color conversion), float broadcast to 3
+// channels; traverse() names it `value` as Mitsuba does.
+TEST(CamTexture, RawConstant) {
+    LoadContext ctx;
+    Properties vec("rawconstant", {"scene.xml", 3});
+    vec.set("value", Vec3f(0.5f, -2.f, 3.f), {"scene.xml", 4});
+    auto v = std::static_pointer_cast<Texture>(make_texture(vec, ctx));
+    EXPECT_EQ(at_uv(*v, 0.3f, 0.7f), Color3f(0.5f, -2.f, 3.f));
+    Properties one("rawconstant", {"scene.xml", 3});
+    one.set("value", 0.25, {"scene.xml", 4});
+    EXPECT_EQ(at_uv(*std::static_pointer_cast<Texture>(make_texture(one, ctx)), 0.f, 0.f), Color3f(0.25f));
+    struct Names final : ParamVisitor {
+        std::vector<std::string> names;
+        void put(const std::string& name, float*, int, int*, bool) override { names.push_back(name); }
+        void put_object(const std::string&, Object*) override {}
+    } names;
+    v->traverse(names);
+    EXPECT_EQ(names.names, std::vector<std::string>{"value"});
+    Properties bad("rawconstant", {"scene.xml", 3});
+    bad.set("value", std::string("red"), {"scene.xml", 5});
+    EXPECT_THROW(make_texture(bad, ctx), LoadError);
+}
+
+TEST_F(TextureFixture, FormatAndAccel) {
+    Image tenth(2, 2, Color3f(0.1f));
+    write_image((dir / "tenth.exr").string(), tenth);
+    auto load = [&](const std::string& format) {
+        const SourceLocation loc{"scene.xml", 7};
+        Properties props("bitmap", loc);
+        props.set("filename", std::string("tenth.exr"), loc);
+        props.set("format", format, {"scene.xml", 8});
+        props.set("accel", false, {"scene.xml", 9});
+        auto obj = make_texture(props, ctx);
+        EXPECT_TRUE(props.unqueried().empty());
+        return std::static_pointer_cast<Texture>(obj);
+    };
+    EXPECT_EQ(at_uv(*load("variant"), 0.3f, 0.3f).x, 0.1f);
+    EXPECT_EQ(at_uv(*load("auto"), 0.3f, 0.3f).x, 0.1f);
+    EXPECT_EQ(at_uv(*load("fp16"), 0.3f, 0.3f).x, 0.0999755859375f); // the nearest half to 0.1
+    EXPECT_THROW(load("fp8"), LoadError);
+}
+
+// mesh_attribute on a PLY written here: a quad (fan-split into triangles (0,1,2), (0,2,3)) with float vertex
+// colors color_r/g/b -> vertex_color, a float `weight` -> vertex_weight (1D, broadcast), and 8-bit face
+// colors red/green/blue -> face_color (normalized and sRGB-decoded, as Mitsuba's PLY loader flags them).
+TEST(CamTexture, MeshAttributesFromPly) {
+    test::TempDir dir;
+    dir.write("quad.ply", R"(ply
+format ascii 1.0
+element vertex 4
+property float x
+property float y
+property float z
+property float color_r
+property float color_g
+property float color_b
+property float weight
+element face 1
+property list uchar int vertex_indices
+property uchar red
+property uchar green
+property uchar blue
+end_header
+0 0 0 1 0 0 0.5
+1 0 0 0 1 0 1.5
+1 1 0 0 0 1 2.5
+0 1 0 1 1 1 3.5
+4 0 1 2 3 255 128 0
+)");
+    auto scene = load_scene_string(
+        test::scene(R"(<shape type="ply"><string name="filename" value="quad.ply"/></shape>)"), dir.str());
+    const Shape& shape = *scene->shapes.at(0);
+    ASSERT_EQ(shape.mesh.face_count(), 2u);
+    ASSERT_TRUE(shape.mesh.attribute("vertex_color"));
+    EXPECT_EQ(shape.mesh.attribute("vertex_color")->dim, 3);
+    ASSERT_TRUE(shape.mesh.attribute("face_color"));
+
+    auto texture = [](const std::string& name, float scale) {
+        Properties props("mesh_attribute", {"scene.xml", 3});
+        props.set("name", name, {"scene.xml", 4});
+        if (scale != 1.f) props.set("scale", double(scale), {"scene.xml", 5});
+        LoadContext ctx;
+        return std::static_pointer_cast<Texture>(make_texture(props, ctx));
+    };
+    SurfaceInteraction3f si;
+    si.shape = &shape;
+    si.prim_index = 1; // triangle (0, 2, 3)
+    si.bary = Vec2f(0.25f, 0.5f);
+    const uint32_t* tri = &shape.mesh.indices[3];
+    ASSERT_EQ(tri[0], 0u);
+    ASSERT_EQ(tri[1], 2u);
+    ASSERT_EQ(tri[2], 3u);
+    // 0.25 (1,0,0) + 0.25 (0,0,1) + 0.5 (1,1,1), times the scale 2.
+    const Color3f color = texture("vertex_color", 2.f)->eval(si);
+    EXPECT_NEAR(color.x, 2.f * 0.75f, 1e-6f);
+    EXPECT_NEAR(color.y, 2.f * 0.5f, 1e-6f);
+    EXPECT_NEAR(color.z, 2.f * 0.75f, 1e-6f);
+    EXPECT_NEAR(texture("vertex_weight", 1.f)->eval(si).y, 0.25f * 0.5f + 0.25f * 2.5f + 0.5f * 3.5f, 1e-6f);
+    for (uint32_t face : {0u, 1u}) {
+        si.prim_index = face;
+        const Color3f c = texture("face_color", 1.f)->eval(si);
+        EXPECT_EQ(c, Color3f(1.f, srgb_to_linear(128.f / 255.f), 0.f)) << face;
+    }
+    EXPECT_THROW(texture("vertex_normal_thing", 1.f)->eval(si), Error);
+    Properties bad("mesh_attribute", {"scene.xml", 3});
+    bad.set("name", std::string("color"), {"scene.xml", 4});
+    LoadContext ctx;
+    EXPECT_THROW(make_texture(bad, ctx), LoadError);
+}
+
+// The bitmap's `data` (Mitsuba's traverse() key) against central finite differences: a diffuse plane textured
+// by a 4x4 bitmap fills the view; the direction raises only the texels of the left half (x < 2), so an
+// indexing error (a transposed or shifted texel) changes where the derivative lies. Tolerances:
+// tests/diff_check.h.
+TEST(CamTexture, BitmapDataDerivativeMatchesFiniteDifferences) {
+    test::TempDir dir;
+    Image texels(4, 4);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x)
+            texels.at(x, y) = Color3f(0.2f + 0.1f * x, 0.3f + 0.1f * y, 0.5f);
+    write_image(dir.str() + "/texels.exr", texels);
+    auto scene = load_scene_string(
+        test::scene(R"(<integrator type="path"><integer name="max_depth" value="2"/></integrator>
+      <sensor type="perspective"><float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0,0,3" target="0,0,0" up="0,1,0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/></film></sensor>
+      <shape type="rectangle"><transform name="to_world"><scale value="1.5"/></transform>
+        <bsdf type="diffuse" id="mat"><texture type="bitmap" name="reflectance"><string name="filename" value="texels.exr"/></texture></bsdf></shape>
+      <emitter type="point"><point name="position" value="0.3,0.5,2"/><rgb name="intensity" value="4"/></emitter>
+      <emitter type="constant"><rgb name="radiance" value="0.3"/></emitter>)"),
+        dir.str());
+    std::string direction;
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x)
+            for (int c = 0; c < 3; ++c)
+                direction += std::string(direction.empty() ? "" : ",") + (x < 2 ? "1" : "0");
+    Parameters params(*scene);
+    params.enable({parse_param_selection("mat.reflectance.data=" + direction)});
+    const test::DerivativePair r = test::derivative_and_fd(*scene, params, 16, 32, 1e-2);
+    const test::DiffCheck c = test::check_against(r.derivative.derivative, r.derivative.stderr_img,
+                                                  r.fd.derivative, r.fd.stderr_img);
+    EXPECT_TRUE(c.passes()) << test::describe(c);
+    std::printf("  mat.reflectance.data: %s\n", test::describe(c).c_str());
+    // The derivative lives on one half of the plane: texels x < 2 reach u < 0.625 through the bilinear
+    // interpolation, world x < 0.375; the outer 5 columns on each side see |world x| > 0.64. One side must be
+    // ~0 and the other clearly not (which side is the image's left depends on the camera's handedness).
+    double side[2] = {0, 0};
+    for (int y = 0; y < 24; ++y)
+        for (int x = 0; x < 24; ++x)
+            if (x < 5 || x >= 19) side[x < 5 ? 0 : 1] += std::abs(r.fd.derivative.at(x, y).x);
+    EXPECT_GT(std::max(side[0], side[1]), 1e-3);
+    EXPECT_LT(std::min(side[0], side[1]), 0.01 * std::max(side[0], side[1])) << side[0] << " vs " << side[1];
 }

@@ -13,18 +13,21 @@ namespace {
 
 // A glossy plane filling the view, lit by a point light and by a large, dim area light above and out of view:
 // no silhouette and no shadow in view, so none of the tested motions changes visibility (the interior term is
-// the whole derivative). A large dim light keeps the per-sample distribution light-tailed, which the
-// 16-batch standard errors of the checks need.
+// the whole derivative; sample_border keeps the pixel filters whole, so that the film's edge does not cut
+// them either, a jump under camera motion that the pixel-boundary term handles). A large dim light keeps the
+// per-sample distribution light-tailed, which the 16-batch standard errors of the checks need.
 std::string scene_xml(const std::string& plane_bsdf = "") {
     return R"(<scene version="3.0.0">
       <integrator type="path"><integer name="max_depth" value="3"/></integrator>
       <sensor type="perspective" id="cam"><float name="fov" value="40"/>
         <transform name="to_world"><lookat origin="0,0.5,3" target="0,0,0" up="0,1,0"/></transform>
-        <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/></film></sensor>
+        <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/>
+          <boolean name="sample_border" value="true"/></film></sensor>
       <shape type="rectangle" id="plane"><transform name="to_world"><scale value="5"/></transform>)" +
-           (plane_bsdf.empty() ? std::string(R"(<bsdf type="roughconductor" id="mat"><float name="alpha" value="0.3"/>
+           (plane_bsdf.empty()
+                ? std::string(R"(<bsdf type="roughconductor" id="mat"><float name="alpha" value="0.3"/>
           <string name="distribution" value="ggx"/></bsdf>)")
-                               : plane_bsdf) +
+                : plane_bsdf) +
            R"(</shape>
       <shape type="rectangle" id="light"><transform name="to_world"><scale value="1.2"/><rotate x="1" angle="135"/>
           <translate value="-0.5,2.6,1.5"/></transform>

@@ -122,8 +122,8 @@ const DocScene kScenes[] = {
     {"shape_sphere_light_mesh.xml", "", ""},
     {"shape_sphere_parameterization.xml", "", ""},
     {"texture_checkerboard.xml", "", ""},
-    {"texture_mesh_attribute_face.xml", "texture", "mesh_attribute"},
-    {"texture_mesh_attribute_vertex.xml", "texture", "mesh_attribute"},
+    {"texture_mesh_attribute_face.xml", "", ""},
+    {"texture_mesh_attribute_vertex.xml", "", ""},
     {"variants_cbox_rgb.xml", "", ""},
     {"variants_cbox_spectral.xml", "", ""},
 };

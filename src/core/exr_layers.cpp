@@ -2,35 +2,65 @@
 
 #include "core/error.h"
 
+#include <Imath/half.h>
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfOutputFile.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 
 namespace penumbra {
 
-void write_exr_layers(const std::string& path, const std::vector<std::pair<std::string, const Image*>>& layers) {
-    if (layers.empty()) throw Error("write_exr_layers: no layers for '" + path + "'");
-    const int w = layers[0].second->width, h = layers[0].second->height;
-    Imf::Header header(w, h);
+namespace {
+
+// Per-channel storage in the file's component type (the library converts nothing on write).
+struct Converted {
+    std::vector<half> f16;
+    std::vector<uint32_t> u32;
+};
+
+} // namespace
+
+void write_exr_channels(const std::string& path, int width, int height,
+                        const std::vector<ExrChannel>& channels, ComponentFormat format) {
+    if (channels.empty()) throw Error("write_exr_channels: no channels for '" + path + "'");
+    const size_t n = size_t(width) * size_t(height);
+    const Imf::PixelType type = format == ComponentFormat::Float16   ? Imf::HALF
+                                : format == ComponentFormat::Float32 ? Imf::FLOAT
+                                                                     : Imf::UINT;
+    const size_t bytes = format == ComponentFormat::Float16 ? sizeof(half) : 4;
+    Imf::Header header(width, height);
     Imf::FrameBuffer fb;
-    const char* channels[3] = {"R", "G", "B"};
-    for (const auto& [name, image] : layers) {
-        if (image->width != w || image->height != h) throw Error("write_exr_layers: layer sizes differ in '" + path + "'");
-        for (int c = 0; c < 3; ++c) {
-            const std::string channel = name.empty() ? channels[c] : name + "." + channels[c];
-            header.channels().insert(channel, Imf::Channel(Imf::FLOAT));
-            char* base = reinterpret_cast<char*>(const_cast<Color3f*>(image->pixels.data())) + c * sizeof(float);
-            fb.insert(channel, Imf::Slice(Imf::FLOAT, base, sizeof(Color3f), sizeof(Color3f) * w));
+    std::vector<Converted> storage(channels.size());
+    for (size_t c = 0; c < channels.size(); ++c) {
+        const ExrChannel& ch = channels[c];
+        if (ch.values.size() != n)
+            throw Error("write_exr_channels: channel '" + ch.name + "' has the wrong size");
+        if (header.channels().findChannel(ch.name))
+            throw Error("write_exr_channels: duplicate channel '" + ch.name + "' in '" + path + "'");
+        char* base = reinterpret_cast<char*>(const_cast<float*>(ch.values.data()));
+        if (format == ComponentFormat::Float16) {
+            storage[c].f16.assign(ch.values.begin(), ch.values.end());
+            base = reinterpret_cast<char*>(storage[c].f16.data());
+        } else if (format == ComponentFormat::UInt32) {
+            storage[c].u32.resize(n);
+            for (size_t i = 0; i < n; ++i)
+                storage[c].u32[i] =
+                    uint32_t(std::llround(std::clamp(double(ch.values[i]), 0.0, 1.0) * 4294967295.0));
+            base = reinterpret_cast<char*>(storage[c].u32.data());
         }
+        header.channels().insert(ch.name, Imf::Channel(type));
+        fb.insert(ch.name, Imf::Slice(type, base, bytes, bytes * size_t(width)));
     }
     const std::string tmp = path + ".tmp";
     try {
         Imf::OutputFile file(tmp.c_str(), header);
         file.setFrameBuffer(fb);
-        file.writePixels(h);
+        file.writePixels(height);
     } catch (const std::exception& e) {
         std::remove(tmp.c_str());
         throw Error("cannot write '" + path + "': " + e.what());

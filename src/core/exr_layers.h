@@ -1,14 +1,25 @@
-// Multi-layer OpenEXR output (AOVs): the layer named "" becomes R,G,B; others become <name>.R/G/B.
+// Multi-channel OpenEXR output: the film's pixel formats and AOV layers (channel <layer>.<letter>).
 #pragma once
 #include "core/image.h"
 
 #include <string>
-#include <utility>
 #include <vector>
 
 namespace penumbra {
 
-// All images must have the same size. Written to a temporary file and renamed; throws Error on failure.
-void write_exr_layers(const std::string& path, const std::vector<std::pair<std::string, const Image*>>& layers);
+// Mitsuba's hdrfilm `component_format`: how the channels are stored in the file.
+enum class ComponentFormat { Float16, Float32, UInt32 };
+
+// One named channel: width * height values, row-major, top row first.
+struct ExrChannel {
+    std::string name;
+    std::vector<float> values;
+};
+
+// All channels must hold width * height values. UInt32 stores round(clamp(v, 0, 1) (2^32 - 1))
+// (Mitsuba's Bitmap marks integer components as normalized). Written to a
+// temporary file and renamed; throws Error on failure.
+void write_exr_channels(const std::string& path, int width, int height,
+                        const std::vector<ExrChannel>& channels, ComponentFormat format);
 
 } // namespace penumbra

@@ -129,19 +129,41 @@ void write_exr(const std::string& path, const Image& image) {
     file.writePixels(image.height);
 }
 
-// PNG: linear values clamped to [0,1], sRGB-encoded, rounded to 8 bits.
-void write_png(const std::string& path, const Image& image) {
-    std::vector<unsigned char> bytes(image.pixels.size() * 3);
-    for (size_t i = 0; i < image.pixels.size(); ++i)
-        for (int c = 0; c < 3; ++c) {
-            const float v = linear_to_srgb(std::clamp(image.pixels[i][c], 0.f, 1.f));
-            bytes[3 * i + c] = (unsigned char)(std::lround(v * 255.f));
-        }
-    if (!stbi_write_png(path.c_str(), image.width, image.height, 3, bytes.data(), image.width * 3))
+// PNG: linear values clamped to [0,1], sRGB-encoded (alpha: linear), rounded to 8 bits.
+void write_png_data(const std::string& path, int width, int height, int channels,
+                    const std::vector<float>& values) {
+    const bool has_alpha = channels == 2 || channels == 4;
+    std::vector<unsigned char> bytes(values.size());
+    for (size_t i = 0; i < values.size(); ++i) {
+        const bool alpha = has_alpha && int(i % channels) == channels - 1;
+        const float v = std::clamp(values[i], 0.f, 1.f);
+        bytes[i] = (unsigned char)(std::lround((alpha ? v : linear_to_srgb(v)) * 255.f));
+    }
+    if (!stbi_write_png(path.c_str(), width, height, channels, bytes.data(), width * channels))
         throw std::runtime_error("cannot write PNG data");
 }
 
+// Writes through `path + ".tmp"`, renamed into place on success.
+template <typename Write> void write_atomically(const std::string& path, const Write& write) {
+    const std::string tmp = path + ".tmp";
+    try {
+        write(tmp);
+        std::filesystem::rename(tmp, path);
+    } catch (const std::exception& e) {
+        std::error_code ignored;
+        std::filesystem::remove(tmp, ignored);
+        fail("write_image", path, e.what());
+    }
+}
+
 } // namespace
+
+// IEC 61966-2-1: the linear-sRGB to XYZ matrix (the one Mitsuba 3 uses for its xyz pixel formats).
+Color3f srgb_to_xyz(const Color3f& c) {
+    return {0.412453f * c.x + 0.357580f * c.y + 0.180423f * c.z,
+            0.212671f * c.x + 0.715160f * c.y + 0.072169f * c.z,
+            0.019334f * c.x + 0.119193f * c.y + 0.950227f * c.z};
+}
 
 // IEC 61966-2-1 sRGB transfer function and its inverse.
 float srgb_to_linear(float v) {
@@ -162,18 +184,24 @@ void write_image(const std::string& path, const Image& image) {
         fail("write_image", path, "unsupported extension (expected .exr or .png)");
     if (image.width <= 0 || image.height <= 0 || image.pixels.size() != size_t(image.width) * image.height)
         fail("write_image", path, "image has invalid dimensions");
-    const std::string tmp = path + ".tmp";
-    try {
-        if (ext == ".exr")
-            write_exr(tmp, image);
-        else
-            write_png(tmp, image);
-        std::filesystem::rename(tmp, path);
-    } catch (const std::exception& e) {
-        std::error_code ignored;
-        std::filesystem::remove(tmp, ignored);
-        fail("write_image", path, e.what());
+    if (ext == ".exr") {
+        write_atomically(path, [&](const std::string& tmp) { write_exr(tmp, image); });
+        return;
     }
+    std::vector<float> values(image.pixels.size() * 3);
+    for (size_t i = 0; i < image.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            values[3 * i + c] = image.pixels[i][c];
+    write_png(path, image.width, image.height, 3, values);
+}
+
+void write_png(const std::string& path, int width, int height, int channels,
+               const std::vector<float>& values) {
+    if (width <= 0 || height <= 0 || channels < 1 || channels > 4 ||
+        values.size() != size_t(width) * height * channels)
+        fail("write_image", path, "image has invalid dimensions");
+    write_atomically(path,
+                     [&](const std::string& tmp) { write_png_data(tmp, width, height, channels, values); });
 }
 
 } // namespace penumbra

@@ -23,6 +23,13 @@ Image read_image(const std::string& path, bool srgb_to_linear = true);
 // Writes by extension: .exr (32-bit float RGB) or .png (sRGB-encoded, clamped 8-bit). The file is written to a
 // temporary name and renamed, so a failed write never leaves a partial file. Throws Error on failure.
 void write_image(const std::string& path, const Image& image);
+// Writes an 8-bit PNG of `channels` (1: gray, 2: gray + alpha, 3: RGB, 4: RGBA) interleaved values per pixel:
+// color channels clamped and sRGB-encoded, alpha clamped and stored linearly. Throws Error on failure.
+void write_png(const std::string& path, int width, int height, int channels,
+               const std::vector<float>& values);
+
+// Linear sRGB (Rec. 709 primaries, D65 white) to CIE 1931 XYZ.
+Color3f srgb_to_xyz(const Color3f& rgb);
 
 float srgb_to_linear(float v);
 float linear_to_srgb(float v);

@@ -44,9 +44,8 @@ FilmSample sample_film(const ReconstructionFilter& filter, Sampler& sampler, boo
 Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sampler& sampler, int x, int y,
                                const PixelStratum& stratum, const PathSettings& settings, RayCounter& rays) {
     const Sensor& sensor = *scene.sensor;
-    const Vec2f offset =
-        sensor.film->rfilter->sample(stratum(sampler.next_2d()));
-    const auto [ray, ray_weight] = sensor.sample_ray(Vec2f(x + 0.5f + offset.x, y + 0.5f + offset.y), sampler.next_2d());
+    const Vec2f pos = sensor.film->sample_position(x, y, stratum(sampler.next_2d()));
+    const auto [ray, ray_weight] = sensor.sample_ray(pos, sampler.next_2d());
     ++rays.rays;
     const SurfaceInteraction3f first = scene.intersect(ray);
     if (!first.is_valid())
@@ -71,7 +70,7 @@ Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sa
     const SurfaceInteraction3f first = scene.intersect(ray);
     if (!first.is_valid()) {
         // The environment seen through the film is a direction: it does not move with θ.
-        const float w = filter.eval_normalized(fs.offset) / fs.pdf;
+        const float w = sensor.film->filter_weight(x, y, center + fs.offset) / fs.pdf;
         return Color3<Var>(settings.hide_emitters ? Color3f(0.f) : scene.eval_environment(ray.d) * ray_weight * w);
     }
 
@@ -82,7 +81,7 @@ Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sa
     Vec2<Var> s;
     Var jacobian;
     if (!sensor.film_position(p_cam, n_cam, s, jacobian)) return Color3<Var>(Var(0.f));
-    const Var P = filter.eval_normalized(Vec2<Var>(s.x - Var(center.x), s.y - Var(center.y)));
+    const Var P = sensor.film->filter_weight(x, y, s);
     const Var camera_factor = P * relative_change(jacobian * form.jacobian(first)) / Var(fs.pdf);
 
     x1.wi = x1.to_local(form.direction_from_reference_camera(sensor.to_sensor(p_cam)));

@@ -47,8 +47,7 @@ bool finite(const Vec3d& v) { return std::isfinite(v.x) && std::isfinite(v.y) &&
 
 // The film sample of path m of a pixel (filter importance sampling, as the renderer): the camera ray and its weight.
 std::pair<Ray, Color3f> camera_sample(const Sensor& sensor, Sampler& sampler, int x, int y) {
-    const Vec2f offset = sensor.film->rfilter->sample(sampler.next_2d());
-    return sensor.sample_ray(Vec2f(x + 0.5f + offset.x, y + 0.5f + offset.y), sampler.next_2d());
+    return sensor.sample_ray(sensor.film->sample_position(x, y, sampler.next_2d()), sampler.next_2d());
 }
 
 // One pass over the film: pixel j draws budget.count(j) paths, each weighted by 1 / c_j. Primal: pass 2 only;

@@ -7,16 +7,23 @@
 namespace penumbra {
 
 bool needs_pixel_boundary(const Scene& scene, const Parameters& params, FirstVertex first_vertex) {
-    return scene.sensor->film->rfilter->plugin == "box" && !image_space_first_vertex(scene, params, first_vertex);
+    const Film& film = *scene.sensor->film;
+    return (film.rfilter->plugin == "box" || !film.sample_border) &&
+           !image_space_first_vertex(scene, params, first_vertex);
 }
 
 namespace {
 
 // The pixel edges as unit segments: vertical ones x = k, y ∈ [row, row + 1] (k = 0..W, one per row), then
-// horizontal ones y = k, x ∈ [column, column + 1]; each is cut into `strata` equal parts with one sample each.
+// horizontal ones y = k, x ∈ [column, column + 1]; each is cut into `strata` equal parts with one sample
+// each. A continuous filter cut at the film's edge (no sample_border) jumps there only: k = 0 and W (0 and
+// H).
 struct PixelEdges {
     int width, height, strata;
-    uint64_t segments() const { return uint64_t(width + 1) * height + uint64_t(height + 1) * width; }
+    bool film_edge_only;
+    uint64_t lines(int extent) const { return film_edge_only ? 2 : uint64_t(extent + 1); }
+    int line(uint64_t i, int extent) const { return film_edge_only ? (i == 0 ? 0 : extent) : int(i); }
+    uint64_t segments() const { return lines(width) * height + lines(height) * width; }
     uint64_t samples() const { return segments() * uint64_t(strata); }
 };
 
@@ -31,12 +38,13 @@ BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, c
     const Sensor& sensor = *scene.sensor;
     const int W = grid.width, H = grid.height;
     const uint64_t segment = i / uint64_t(grid.strata), j = i % uint64_t(grid.strata);
-    const uint64_t vertical = uint64_t(W + 1) * H;
+    const uint64_t vertical = grid.lines(W) * H;
     const bool is_vertical = segment < vertical;
     // The segment's line k, its position along the line (row or column) and the line family's stream.
-    const uint64_t along = is_vertical ? segment / uint64_t(W + 1) : (segment - vertical) / uint64_t(H + 1);
-    const int k = int(is_vertical ? segment % uint64_t(W + 1) : (segment - vertical) % uint64_t(H + 1));
     const int extent = is_vertical ? W : H;
+    const uint64_t per_row = grid.lines(extent), index = is_vertical ? segment : segment - vertical;
+    const uint64_t along = index / per_row;
+    const int k = grid.line(index % per_row, extent);
     sampler.start(seed, (is_vertical ? along : uint64_t(H) + along) * uint64_t(grid.strata) + j, 0);
     const float t = float(along) + (float(j) + sampler.next_1d()) / float(grid.strata);
     const Vec2f s = is_vertical ? Vec2f(float(k), t) : Vec2f(t, float(k));
@@ -62,8 +70,9 @@ BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, c
         return out;
     const Var velocity = is_vertical ? s_t.x - Var(s.x) : s_t.y - Var(s.y);
 
-    // The pixel before the line (outward normal +across) loses what crosses it, the one after gains it. Each
-    // unit segment is a stratum of the total edge length, so 1/pdf = the number of segments.
+    // The pixel before the line (outward normal +across) loses what crosses it, the one after gains it; the
+    // splats reach every pixel whose filter jumps there (P_j of Film::filter_weight). Each unit segment is a
+    // stratum of the total edge length, so 1/pdf = the number of segments.
     const float inv_pdf = float(grid.segments()), nudge = 1e-3f;
     if (k > 0) out.add_splat(s - across * nudge, L * -inv_pdf, velocity);
     if (k < extent) out.add_splat(s + across * nudge, L * inv_pdf, velocity);
@@ -73,7 +82,7 @@ BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, c
 constexpr uint64_t Salt = 0x4CF5AD432745937FULL;
 
 PixelEdges pixel_edges(const Film& film, const BoundaryOptions& options) {
-    PixelEdges grid{film.width, film.height, 1};
+    PixelEdges grid{film.width, film.height, 1, film.rfilter->plugin != "box"};
     // The budget per pixel spread evenly over the ~2 edge segments per pixel.
     grid.strata = std::max(1, int(std::lround(double(options.samples_per_pixel) * film.width * film.height / double(grid.segments()))));
     return grid;

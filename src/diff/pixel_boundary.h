@@ -1,20 +1,22 @@
 // The pixel-boundary term of the material-form camera vertex (paper 001 §4.3): with a box reconstruction
-// filter, P_j(s) jumps at pixel j's edges, and as the geometry (or the camera) moves, the material points seen
-// just inside an edge cross it. For pixel j the term is
+// filter, P_j(s) jumps at pixel j's edges, and as the geometry (or the camera) moves, the material points
+// seen just inside an edge cross it. For pixel j the term is
 //     −∮_{∂pixel j} L(s) (ṡ(s) · n_out(s)) dℓ(s),
 // with ṡ the film-space velocity of the material point seen at s (first order, on the tape) and n_out the
 // pixel's outward normal; the interior term, whose filter is constant inside the pixel, misses it. Continuous
-// filters (tent, gaussian) need no such term, and neither does the image-space first vertex (its filter does
-// not move; diff/first_vertex.h). Points are stratified along every pixel edge, with the same offsets and
-// random numbers on a pixel's opposite edges; each interior edge point contributes to the two pixels it
-// separates.
+// filters (tent, gaussian) jump only where the film cuts them (hdrfilm without sample_border:
+// Film::filter_weight): the term then runs over the film's edge alone. The image-space first vertex needs
+// none (its filter does not move; diff/first_vertex.h). Points are stratified along every pixel edge, with
+// the same offsets and random numbers on a pixel's opposite edges; each interior edge point contributes to
+// the two pixels it separates.
 #pragma once
 #include "core/image.h"
 #include "diff/boundary_driver.h"
 
 namespace penumbra {
 
-// Whether the pixel-boundary term is needed: a box filter and a material-form first vertex.
+// Whether the pixel-boundary term is needed: a box filter, or a filter cut at the film's edge, and a
+// material-form first vertex.
 bool needs_pixel_boundary(const Scene& scene, const Parameters& params, FirstVertex first_vertex);
 
 class PixelBoundary final : public BoundaryTerm {

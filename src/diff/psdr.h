@@ -20,7 +20,7 @@ struct PsdrOptions {
     int primary_spp = 4;      // primary boundary samples per pixel (per batch); 0 disables the term
     int direct_spp = 4;       // direct boundary samples per pixel (per batch); 0 disables the term
     int indirect_spp = 4;     // indirect boundary samples per pixel and technique (per batch); 0 disables it
-    int pixel_spp = 4;        // pixel-boundary samples per pixel (per batch; box filters only); 0 disables it
+    int pixel_spp = 4;        // pixel-boundary samples per pixel (per batch; box or cut filters); 0: off
     bool guiding = true;      // contrast-guided sampling of the primary term's edges (always mixed with uniform)
 };
 
@@ -32,7 +32,7 @@ struct PsdrDerivative {
     Image direct_stderr;
     Image indirect;            // indirect boundary term
     Image indirect_stderr;
-    Image pixel;               // pixel-boundary term (zero unless the film has a box filter)
+    Image pixel;               // pixel-boundary term (zero unless the film has a box or cut filter)
     Image pixel_stderr;
     Image total;               // interior + boundary
     Image total_stderr;        // combined standard error (the estimators are independent)

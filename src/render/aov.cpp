@@ -56,6 +56,34 @@ std::vector<std::string> AOVIntegrator::layer_names() const {
     return names;
 }
 
+namespace {
+// Mitsuba's channel letters per AOV type (the values are the first components of each layer's colors).
+const char* channel_letters(AOVIntegrator::Type type) {
+    using T = AOVIntegrator::Type;
+    switch (type) {
+    case T::Depth:
+        return "T";
+    case T::UV:
+        return "UV";
+    case T::Albedo:
+        return "RGB";
+    case T::PrimIndex:
+    case T::ShapeIndex:
+        return "I";
+    default:
+        return "XYZ"; // position, geo_normal, sh_normal
+    }
+}
+} // namespace
+
+std::vector<std::string> AOVIntegrator::layer_channels() const {
+    std::vector<std::string> channels;
+    if (inner_) channels.push_back("RGB");
+    for (const auto& a : aovs_)
+        channels.push_back(channel_letters(a.type));
+    return channels;
+}
+
 void AOVIntegrator::sample(const Scene& scene, Sampler& sampler, const Ray& ray, Color3f* out, RayCounter& rays) const {
     if (inner_) inner_->sample(scene, sampler, ray, out++, rays);
     const SurfaceInteraction3f si = scene.intersect(ray);

@@ -12,10 +12,12 @@
 
 namespace penumbra {
 
-// One named output (the main image has an empty name; AOVs are named layers of the EXR).
+// One named output (the main image has an empty name; AOVs are named layers of the EXR). `channels` names the
+// EXR channels <name>.<letter>: "RGB" (linear sRGB), "XYZ" (CIE XYZ), or "A" (the film's alpha, in image.x).
 struct Layer {
     std::string name;
     Image image;
+    std::string channels = "RGB";
 };
 
 class Integrator : public Object {
@@ -34,6 +36,10 @@ public:
     std::vector<Layer> render(const Scene& scene, const RenderOptions& options, RenderStats& stats) const override;
     // Names of the RGB layers sample() writes, in order.
     virtual std::vector<std::string> layer_names() const { return {""}; }
+    // The channel letters of each layer (see Layer::channels), parallel to layer_names().
+    virtual std::vector<std::string> layer_channels() const {
+        return std::vector<std::string>(layer_names().size(), "RGB");
+    }
     // Estimates the layers' values for one camera ray; writes layer_names().size() colors to `out`.
     virtual void sample(const Scene& scene, Sampler& sampler, const Ray& ray, Color3f* out, RayCounter& rays) const = 0;
 };

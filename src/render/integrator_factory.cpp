@@ -1,5 +1,6 @@
 #include "render/aov.h"
 #include "render/direct.h"
+#include "render/moment.h"
 #include "render/path.h"
 #include "render/ptracer.h"
 #include "scene/factory.h"
@@ -12,6 +13,7 @@ std::shared_ptr<Object> make_integrator(const Properties& props, const LoadConte
     if (type == "direct") return std::make_shared<DirectIntegrator>(props);
     if (type == "ptracer") return std::make_shared<ParticleTracer>(props);
     if (type == "aov") return std::make_shared<AOVIntegrator>(props);
+    if (type == "moment") return std::make_shared<MomentIntegrator>(props);
     throw_unsupported_plugin(props, ObjectKind::Integrator);
 }
 

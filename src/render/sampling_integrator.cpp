@@ -14,17 +14,21 @@ std::vector<Layer> SamplingIntegrator::render(const Scene& scene, const RenderOp
     const Film& film = *sensor.film;
     const int width = film.width, height = film.height;
     const int spp = sensor.sampler->effective_spp(options.spp);
-    const std::vector<std::string> names = layer_names();
+    const std::vector<std::string> names = layer_names(), channels = layer_channels();
     const size_t n_layers = names.size();
     std::vector<Layer> layers;
-    for (const auto& name : names) layers.push_back({name, Image(width, height)});
+    for (size_t l = 0; l < n_layers; ++l)
+        layers.push_back({names[l], Image(width, height), channels[l]});
+    // The film's alpha (Mitsuba: whether the camera ray hits a surface), filtered like the other layers.
+    const bool alpha = film.has_alpha();
+    if (alpha) layers.push_back({"", Image(width, height), "A"});
     std::atomic<uint64_t> rays{0}, dropped{0};
     const auto start = std::chrono::steady_clock::now();
 
     for_each_tile(width, height, options.threads, [&](int x0, int y0, int x1, int y1) {
         Sampler sampler(*sensor.sampler, spp);
         RayCounter counter;
-        std::vector<Color3f> value(n_layers), sum(n_layers);
+        std::vector<Color3f> value(n_layers), sum(layers.size());
         uint64_t local_dropped = 0;
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
@@ -34,9 +38,8 @@ std::vector<Layer> SamplingIntegrator::render(const Scene& scene, const RenderOp
                     sampler.start(options.seed, pixel, uint64_t(s));
                     // Filter importance sampling: the pixel estimate is ∫ f(x - x_j) L(x) dx with f normalized.
                     const Vec2f u = sampler.next_2d();
-                    const Vec2f offset = film.rfilter->sample(
-                        options.stratified ? PixelStratum(s, spp, options.seed, pixel)(u) : u);
-                    const Vec2f pos(x + 0.5f + offset.x, y + 0.5f + offset.y);
+                    const Vec2f pos = film.sample_position(
+                        x, y, options.stratified ? PixelStratum(s, spp, options.seed, pixel)(u) : u);
                     const auto [ray, weight] = sensor.sample_ray(pos, sampler.next_2d());
                     ++counter.rays;
                     sample(scene, sampler, ray, value.data(), counter);
@@ -47,8 +50,13 @@ std::vector<Layer> SamplingIntegrator::render(const Scene& scene, const RenderOp
                         continue;
                     }
                     for (size_t l = 0; l < n_layers; ++l) sum[l] += value[l] * weight;
+                    if (alpha) {
+                        ++counter.rays;
+                        if (scene.intersect(ray).is_valid()) sum[n_layers] += Color3f(1.f);
+                    }
                 }
-                for (size_t l = 0; l < n_layers; ++l) layers[l].image.at(x, y) = sum[l] / float(spp);
+                for (size_t l = 0; l < layers.size(); ++l)
+                    layers[l].image.at(x, y) = sum[l] / float(spp);
             }
         rays += counter.rays;
         dropped += local_dropped;

@@ -2,10 +2,14 @@
 //
 // hdrfilm:
 //   width, height     integer  768, 576
-//   file_format       string   openexr   (only OpenEXR output)
-//   pixel_format      string   rgb       rgb | rgba (penumbra writes RGB either way)
-//   component_format  string   float16   float16 | float32 | uint32 (penumbra writes float32)
-//   sample_border     boolean  false     (true is not supported)
+//   file_format       string   openexr   openexr | exr (the only output format)
+//   pixel_format      string   rgb       luminance | luminance_alpha | rgb | rgba | xyz | xyza; EXR channels
+//                                        Y, Y+A, R,G,B, R,G,B+A, X,Y,Z, X,Y,Z+A (alpha: the filtered fraction
+//                                        of camera rays that hit a surface)
+//   component_format  string   float16   float16 | float32 | uint32 (EXR storage; uint32 is normalized to
+//                                        [0, 1] as Mitsuba's Bitmap does)
+//   sample_border     boolean  false     true: edge pixels' filters also cover the plane beyond the film
+//   banner            boolean  —         accepted and ignored (as Mitsuba 3 does)
 //   crop_offset_x/y   integer  0, 0      top-left pixel of the crop window (the image) in the full frame
 //   crop_width/height integer  the rest  size of the crop window (default: to the frame's right/bottom edge)
 //   rfilter           nested   gaussian
@@ -18,6 +22,7 @@
 #include "scene/factory.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <sstream>
 
@@ -60,6 +65,41 @@ Vec2f ReconstructionFilter::sample(const Vec2f& u) const {
         return -radius_ + (float(i) + std::clamp(t, 0.f, 1.f)) * (2.f * radius_ / FilterTableSize);
     };
     return {invert(u.x), invert(u.y)};
+}
+
+// The tabulated CDF at x: the bin holding x, then linear within it.
+float ReconstructionFilter::cdf(float x) const {
+    const float t = (x + radius_) / (2.f * radius_) * FilterTableSize;
+    if (t <= 0.f) return 0.f;
+    if (t >= FilterTableSize) return 1.f;
+    const int i = int(t);
+    return cdf_[i] + (cdf_[i + 1] - cdf_[i]) * (t - float(i));
+}
+
+// Truncated inversion: u is mapped to [F(lo), F(hi)] before the usual inversion, so the offset has density
+// f / (F(hi) - F(lo)) on [lo, hi] (per axis).
+Vec2f ReconstructionFilter::sample(const Vec2f& u, const Vec2f& lo, const Vec2f& hi) const {
+    const float ax = cdf(lo.x), bx = cdf(hi.x), ay = cdf(lo.y), by = cdf(hi.y);
+    const Vec2f offset = sample(Vec2f(ax + u.x * (bx - ax), ay + u.y * (by - ay)));
+    return {std::clamp(offset.x, lo.x, hi.x), std::clamp(offset.y, lo.y, hi.y)};
+}
+
+// The pixel's filter is centred at (x + 1/2, y + 1/2); without sample_border its support is cut to the film
+// [0, width] x [0, height], as Mitsuba's film samples only there and normalizes by the accumulated weights.
+Vec2f Film::sample_position(int x, int y, const Vec2f& u) const {
+    const Vec2f center(x + 0.5f, y + 0.5f);
+    const Vec2f offset = sample_border
+                             ? rfilter->sample(u)
+                             : rfilter->sample(u, Vec2f(-center.x, -center.y),
+                                               Vec2f(float(width) - center.x, float(height) - center.y));
+    return center + offset;
+}
+
+// F_j = (F(W - c_x) - F(-c_x)) (F(H - c_y) - F(-c_y)) for the separable filter's 1D CDF F.
+float Film::film_mass(int x, int y) const {
+    const float cx = x + 0.5f, cy = y + 0.5f;
+    return (rfilter->cdf(float(width) - cx) - rfilter->cdf(-cx)) *
+           (rfilter->cdf(float(height) - cy) - rfilter->cdf(-cy));
 }
 
 std::string Film::to_string() const {
@@ -146,20 +186,28 @@ std::shared_ptr<Object> make_film(const Properties& props, const LoadContext& ct
     if (film->width <= 0) props.raise("width", "width must be positive");
     if (film->height <= 0) props.raise("height", "height must be positive");
 
+    // Index of the value in `allowed` (case-insensitive, as Mitsuba lowercases these strings).
     auto check_choice = [&](const char* name, const char* def, std::initializer_list<const char*> allowed) {
-        const std::string value = props.get_string(name, def);
+        std::string value = props.get_string(name, def);
+        std::transform(value.begin(), value.end(), value.begin(),
+                       [](unsigned char c) { return char(std::tolower(c)); });
         std::string list;
+        int index = 0;
         for (const char* a : allowed) {
-            if (value == a) return;
+            if (value == a) return index;
+            ++index;
             list += std::string(list.empty() ? "'" : ", '") + a + "'";
         }
         props.raise(name, std::string("invalid ") + name + " '" + value + "' (expected " + list + ")");
     };
     check_choice("file_format", "openexr", {"openexr", "exr"});
-    check_choice("pixel_format", "rgb", {"rgb", "rgba"});
-    check_choice("component_format", "float16", {"float16", "float32", "uint32"});
-    if (props.get_bool("sample_border", false))
-        props.raise("sample_border", "sample_border=true is not supported");
+    using PF = Film::PixelFormat;
+    film->pixel_format = PF(
+        check_choice("pixel_format", "rgb", {"luminance", "luminance_alpha", "rgb", "rgba", "xyz", "xyza"}));
+    film->component_format =
+        ComponentFormat(check_choice("component_format", "float16", {"float16", "float32", "uint32"}));
+    film->sample_border = props.get_bool("sample_border", false);
+    if (props.has("banner")) props.get_bool("banner", true);
     // Mitsuba's Film: the crop window must lie inside the full frame.
     film->full_size = Vec2i(film->width, film->height);
     film->crop_offset = Vec2i(int(props.get_int("crop_offset_x", 0)), int(props.get_int("crop_offset_y", 0)));

@@ -51,6 +51,18 @@ void TriangleMesh::validate(const std::string& context) const {
     for (size_t i = 0; i < uvs.size(); ++i)
         if (!std::isfinite(uvs[i].x) || !std::isfinite(uvs[i].y))
             fail("vertex " + std::to_string(i) + " has non-finite texture coordinates");
+    for (const MeshAttribute& a : attributes) {
+        const size_t count = a.name.rfind("face_", 0) == 0 ? face_count() : vertex_count();
+        if (a.dim < 1 || a.values.size() != count * size_t(a.dim))
+            fail("attribute '" + a.name + "' has " + std::to_string(a.values.size()) + " values for " +
+                 std::to_string(count) + " elements of dimension " + std::to_string(a.dim));
+    }
+}
+
+const MeshAttribute* TriangleMesh::attribute(const std::string& name) const {
+    for (const MeshAttribute& a : attributes)
+        if (a.name == name) return &a;
+    return nullptr;
 }
 
 // Vertex normals as the angle-weighted sum of incident face normals (Thuermer & Wuethrich 1998, as Mitsuba

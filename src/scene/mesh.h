@@ -8,17 +8,28 @@
 
 namespace penumbra {
 
+// A Mitsuba mesh attribute: `dim` floats per vertex ("vertex_<name>") or per triangle ("face_<name>").
+struct MeshAttribute {
+    std::string name;
+    int dim = 1;
+    std::vector<float> values;
+};
+
 struct TriangleMesh {
     std::vector<Vec3f> positions;
     std::vector<Vec3f> normals;    // per-vertex shading normals (empty: use face normals)
     std::vector<Vec2f> uvs;        // per-vertex texture coordinates (empty: uv = barycentrics)
     std::vector<uint32_t> indices; // 3 per triangle
+    std::vector<MeshAttribute> attributes; // extra PLY properties, named as Mitsuba names them
+
+    // The attribute called `name`, or nullptr.
+    const MeshAttribute* attribute(const std::string& name) const;
 
     size_t vertex_count() const { return positions.size(); }
     size_t face_count() const { return indices.size() / 3; }
     void apply_transform(const Transform& to_world); // positions, normals (renormalized)
     // Throws penumbra::Error("<context>: <what is wrong>") on out-of-range indices, non-finite data,
-    // attribute count mismatch or an empty mesh.
+    // attribute count mismatch (normals, uvs, mesh attributes) or an empty mesh.
     void validate(const std::string& context) const;
 };
 

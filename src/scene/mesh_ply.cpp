@@ -1,16 +1,19 @@
 // PLY (Stanford polygon file) reader: ascii, binary_little_endian and binary_big_endian bodies.
 // Vertex properties: x, y, z; optional nx, ny, nz; texture coordinates as u/v, texture_u/texture_v or s/t
 // (Mitsuba 3's order of preference). Faces: a `vertex_indices` or `vertex_index` list of any integer type;
-// polygons are fan-triangulated (v0, v[k-1], v[k]). Every other property and element is skipped by its size.
+// polygons are fan-triangulated (v0, v[k-1], v[k]). Other scalar vertex/face properties become Mitsuba mesh
+// attributes (group_attributes); list properties and other elements are skipped by their size.
 #include "scene/mesh.h"
 
 #include "core/error.h"
+#include "core/image.h"
 
 #include <bit>
 #include <cctype>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 namespace penumbra {
@@ -249,6 +252,64 @@ class BodyReader {
     size_t index_ = 0, count_ = 0;
 };
 
+// Mesh attributes from the scalar properties outside `reserved`, grouped as Mitsuba 3's PLY loader documents:
+// consecutive <p>_{x,y,z,w}, <p>_{r,g,b,a}, <p>_{0,1,2,3} or <p>_{1,2,3,4} form "<prefix><p>" (dim = their
+// number); bare r,g,b[,a] or red,green,blue[,alpha] form "<prefix>color"; any other is "<prefix><name>".
+// slot[k] = (attribute index, component) for property k, or (-1, 0).
+std::vector<MeshAttribute> group_attributes(const PlyElement& el, const std::string& prefix,
+                                            const std::set<std::string>& reserved,
+                                            std::vector<std::pair<int, int>>& slot) {
+    static const std::vector<std::vector<std::string>> suffixes = {
+        {"x", "y", "z", "w"}, {"r", "g", "b", "a"}, {"0", "1", "2", "3"}, {"1", "2", "3", "4"}};
+    static const std::vector<std::vector<std::string>> colors = {{"r", "g", "b", "a"},
+                                                                 {"red", "green", "blue", "alpha"}};
+    std::vector<MeshAttribute> attributes;
+    slot.assign(el.properties.size(), {-1, 0});
+    auto usable = [&](size_t k) {
+        return k < el.properties.size() && !el.properties[k].is_list &&
+               !reserved.count(el.properties[k].name);
+    };
+    // Length of the run of properties from k named head + scheme[0], head + scheme[1], ...
+    auto run = [&](size_t k, const std::string& head, const std::vector<std::string>& scheme) {
+        size_t n = 0;
+        while (n < scheme.size() && usable(k + n) && el.properties[k + n].name == head + scheme[n])
+            ++n;
+        return n;
+    };
+    for (size_t k = 0; k < el.properties.size();) {
+        if (!usable(k)) {
+            ++k;
+            continue;
+        }
+        const std::string& name = el.properties[k].name;
+        std::string attribute = name;
+        size_t n = 1;
+        for (const auto& scheme : colors)
+            if (const size_t m = run(k, "", scheme); m >= 3 && n == 1) {
+                n = m;
+                attribute = "color";
+            }
+        const size_t underscore = name.rfind('_');
+        if (n == 1 && underscore != std::string::npos && underscore > 0)
+            for (const auto& scheme : suffixes)
+                if (const size_t m = run(k, name.substr(0, underscore + 1), scheme); m >= 2 && n == 1) {
+                    n = m;
+                    attribute = name.substr(0, underscore);
+                }
+        for (size_t c = 0; c < n; ++c)
+            slot[k + c] = {int(attributes.size()), int(c)};
+        attributes.push_back({prefix + attribute, int(n), {}});
+        k += n;
+    }
+    return attributes;
+}
+
+// Integer properties are normalized to [0, 1] and sRGB-decoded (Mitsuba flags them Normalized | Gamma).
+float attribute_value(double v, PlyType type) {
+    static const double max[] = {127.0, 255.0, 32767.0, 65535.0, 2147483647.0, 4294967295.0};
+    return is_integer(type) ? srgb_to_linear(float(v / max[int(type)])) : float(v);
+}
+
 // Reads the length prefix of a list property.
 size_t list_count(BodyReader& reader, const PlyProperty& prop) {
     const double n = reader.read(prop.count_type);
@@ -278,6 +339,12 @@ void read_vertices(BodyReader& reader, const PlyElement& el, TriangleMesh& mesh,
                      "vertex property '" + el.properties[size_t(targets[k])].name + "' must not be a list");
             slot[size_t(targets[k])] = k;
         }
+    std::set<std::string> reserved = {"x", "y", "z", "nx", "ny", "nz"};
+    if (iu >= 0) reserved.insert({el.properties[size_t(iu)].name, el.properties[size_t(iv)].name});
+    std::vector<std::pair<int, int>> attribute_slot;
+    std::vector<MeshAttribute> attributes = group_attributes(el, "vertex_", reserved, attribute_slot);
+    for (MeshAttribute& a : attributes)
+        a.values.resize(el.count * size_t(a.dim));
     mesh.positions.resize(el.count);
     if (has_normals) mesh.normals.resize(el.count);
     if (iu >= 0) mesh.uvs.resize(el.count);
@@ -292,12 +359,17 @@ void read_vertices(BodyReader& reader, const PlyElement& el, TriangleMesh& mesh,
             } else {
                 const double v = reader.read(prop.type);
                 if (slot[k] >= 0) values[slot[k]] = float(v);
+                if (const auto [a, c] = attribute_slot[k]; a >= 0)
+                    attributes[size_t(a)].values[i * size_t(attributes[size_t(a)].dim) + size_t(c)] =
+                        attribute_value(v, prop.type);
             }
         }
         mesh.positions[i] = Vec3f(values[0], values[1], values[2]);
         if (has_normals) mesh.normals[i] = Vec3f(values[3], values[4], values[5]);
         if (iu >= 0) mesh.uvs[i] = Vec2f(values[6], values[7]);
     }
+    for (MeshAttribute& a : attributes)
+        mesh.attributes.push_back(std::move(a));
 }
 
 void read_faces(BodyReader& reader, const PlyElement& el, TriangleMesh& mesh, const std::string& path) {
@@ -308,13 +380,22 @@ void read_faces(BodyReader& reader, const PlyElement& el, TriangleMesh& mesh, co
     if (!is_integer(el.properties[size_t(iidx)].type))
         fail(path, 0, "face indices must have an integer type");
     mesh.indices.reserve(el.count * 3);
+    std::vector<std::pair<int, int>> attribute_slot;
+    std::vector<MeshAttribute> attributes =
+        group_attributes(el, "face_", {"vertex_indices", "vertex_index"}, attribute_slot);
+    std::vector<std::vector<float>> record(attributes.size()); // this polygon's values, one per triangle
+    for (size_t a = 0; a < attributes.size(); ++a)
+        record[a].resize(size_t(attributes[a].dim));
     std::vector<uint32_t> polygon;
     for (size_t i = 0; i < el.count; ++i) {
         reader.set_record(el.name, i, el.count);
+        const size_t first_triangle = mesh.face_count();
         for (size_t k = 0; k < el.properties.size(); ++k) {
             const PlyProperty& prop = el.properties[k];
             if (!prop.is_list) {
-                reader.read(prop.type);
+                const double v = reader.read(prop.type);
+                if (const auto [a, c] = attribute_slot[k]; a >= 0)
+                    record[size_t(a)][size_t(c)] = attribute_value(v, prop.type);
                 continue;
             }
             const size_t n = list_count(reader, prop);
@@ -334,7 +415,12 @@ void read_faces(BodyReader& reader, const PlyElement& el, TriangleMesh& mesh, co
             for (size_t j = 2; j < n; ++j)
                 mesh.indices.insert(mesh.indices.end(), {polygon[0], polygon[j - 1], polygon[j]});
         }
+        for (size_t a = 0; a < attributes.size(); ++a)
+            for (size_t t = first_triangle; t < mesh.face_count(); ++t)
+                attributes[a].values.insert(attributes[a].values.end(), record[a].begin(), record[a].end());
     }
+    for (MeshAttribute& a : attributes)
+        mesh.attributes.push_back(std::move(a));
 }
 
 } // namespace

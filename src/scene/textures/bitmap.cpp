@@ -6,7 +6,13 @@
 //   wrap_mode    string     repeat      repeat | mirror | clamp
 //   raw          boolean    false       true: keep 8-bit values as stored (no sRGB -> linear decoding)
 //   to_uv        transform  none        affine map applied to the uv coordinates first
-// Differentiable (traverse): `data`, the linear texel values (3 per texel, row-major, top row first).
+//   format       string     auto        auto | variant | fp16: fp16 rounds the texels to half precision; auto and
+//                                       variant keep float32 (Mitsuba's auto stores <= 16-bit sources as
+//                                       half, a rounding of at most 2^-11 relative that penumbra does not
+//                                       reproduce)
+//   accel        boolean    true        accepted; it selects CUDA texture hardware in Mitsuba, nothing on the CPU
+//
+// traverse(): `data`, the texels (linear RGB, row-major from the top row), differentiable.
 //
 // Uv convention (as Mitsuba): (u, v) = (0, 0) is the top-left corner of the image, u to the right, v down;
 // texel (i, j) covers [i, i+1]/W x [j, j+1]/H. Mitsuba's mesh loaders flip v (v = 1 - v_obj) so that OBJ uvs,
@@ -14,6 +20,8 @@
 #include "core/image.h"
 #include "core/param.h"
 #include "scene/textures/textures.h"
+
+#include <Imath/half.h>
 
 #include <cmath>
 
@@ -144,6 +152,11 @@ std::shared_ptr<Texture> make_bitmap_texture(const Properties& props, const Load
         props.raise("wrap_mode",
                     "invalid wrap_mode '" + wrap_name + "' (expected 'repeat', 'mirror' or 'clamp')");
 
+    const std::string format = props.get_string("format", "auto");
+    if (format != "auto" && format != "variant" && format != "fp16")
+        props.raise("format", "invalid format '" + format + "' (expected 'auto', 'variant' or 'fp16')");
+    props.get_bool("accel", true);
+
     const bool raw = props.get_bool("raw", false);
     const auto to_uv = uv_affine(props.get_transform("to_uv"));
     Image image;
@@ -153,6 +166,10 @@ std::shared_ptr<Texture> make_bitmap_texture(const Properties& props, const Load
         throw LoadError(props.location("filename"), e.what());
     }
     if (image.pixels.empty()) props.raise("filename", "image '" + path + "' is empty");
+    if (format == "fp16")
+        for (Color3f& c : image.pixels)
+            for (int k = 0; k < 3; ++k)
+                c[k] = float(half(c[k]));
     return std::make_shared<BitmapTexture>(std::move(image), filter == "bilinear", wrap, to_uv, filename);
 }
 

@@ -12,6 +12,8 @@ std::shared_ptr<Object> make_texture(const Properties& props, const LoadContext&
     const std::string& type = props.plugin();
     if (type == "bitmap") return make_bitmap_texture(props, ctx);
     if (type == "checkerboard") return make_checkerboard_texture(props);
+    if (type == "mesh_attribute") return make_mesh_attribute_texture(props);
+    if (type == "rawconstant") return make_rawconstant_texture(props);
     if (type == "srgb") return make_srgb_texture(props);
     if (type == "uniform") return make_uniform_texture(props);
     throw_unsupported_plugin(props, ObjectKind::Texture);

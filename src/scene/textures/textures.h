@@ -11,6 +11,8 @@ namespace penumbra {
 
 std::shared_ptr<Texture> make_bitmap_texture(const Properties& props, const LoadContext& ctx);
 std::shared_ptr<Texture> make_checkerboard_texture(const Properties& props);
+std::shared_ptr<Texture> make_mesh_attribute_texture(const Properties& props);
+std::shared_ptr<Texture> make_rawconstant_texture(const Properties& props);
 std::shared_ptr<Texture> make_srgb_texture(const Properties& props);
 std::shared_ptr<Texture> make_uniform_texture(const Properties& props);
 
