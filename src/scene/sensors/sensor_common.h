@@ -45,12 +45,14 @@ class ProjectiveCamera : public Sensor {
         return film_pos.x >= 0.f && film_pos.x <= crop_size_.x && film_pos.y >= 0.f &&
                film_pos.y <= crop_size_.y;
     }
-    // Whether light tracing splats at a film position: on the full frame and within the filter's reach of the
-    // image, so that the image's border pixels get what they get in the full frame's image.
+    // Whether light tracing splats at a film position: within the filter's reach of the image, and on the full
+    // frame unless the film samples the border band beyond it (sample_border), so that the image's border
+    // pixels get what a camera-driven render gives them.
     bool reaches_image(const Vec2f& film_pos) const {
         const float r = film->rfilter->radius();
         const Vec2f f = film_pos + crop_offset_;
-        return f.x >= 0.f && f.x <= size_.x && f.y >= 0.f && f.y <= size_.y && film_pos.x >= -r &&
+        const bool in_frame = film->sample_border || (f.x >= 0.f && f.x <= size_.x && f.y >= 0.f && f.y <= size_.y);
+        return in_frame && film_pos.x >= -r &&
                film_pos.x <= crop_size_.x + r && film_pos.y >= -r && film_pos.y <= crop_size_.y + r;
     }
     // The factor that makes an importance normalized over the full frame integrate to 1 over the image:
