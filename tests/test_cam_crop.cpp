@@ -16,9 +16,13 @@ namespace {
 
 constexpr int FullW = 32, FullH = 24, CropX = 5, CropY = 9, CropW = 14, CropH = 12;
 
+// sample_border: the crop's edge pixels integrate the band beyond the crop that their filter reaches, as the
+// full frame's pixels there do (without it each image cuts its filters at its own edges, so the crop's edge
+// pixels would differ from the full render's by design).
 std::string crop_film(bool crop, const std::string& filter = "gaussian") {
     std::string s = R"(<film type="hdrfilm"><integer name="width" value=")" + std::to_string(FullW) +
-                    R"("/><integer name="height" value=")" + std::to_string(FullH) + R"("/>)";
+                    R"("/><integer name="height" value=")" + std::to_string(FullH) +
+                    R"("/><boolean name="sample_border" value="true"/>)";
     if (crop)
         s += R"(<integer name="crop_offset_x" value=")" + std::to_string(CropX) +
              R"("/><integer name="crop_offset_y" value=")" + std::to_string(CropY) +

@@ -301,7 +301,11 @@ class Parser {
         const Attributes a = attributes(e, loc, {"type", "id", "name"}, {"type"});
         auto node = std::make_shared<XmlNode>();
         node->kind = kind;
+        // Plugin names are matched case-insensitively: Mitsuba finds its plugins as files, so scenes written on
+        // case-insensitive file systems (the docs' principled_blend_creation scenes use "Rectangle") load there.
         node->type = a.at("type");
+        std::transform(node->type.begin(), node->type.end(), node->type.begin(),
+                       [](unsigned char c) { return char(std::tolower(c)); });
         node->location = loc;
         node->props = Properties(node->type, loc);
         const std::string name = a.count("name") ? a.at("name") : std::string();

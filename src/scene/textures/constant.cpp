@@ -4,7 +4,7 @@
 // Mitsuba parameters (via make_texture):
 //   srgb:        color  rgb           (required)
 //   uniform:     value  float         (required)
-//   rawconstant: value  float|vector  (required)  used as is (no color conversion); traverse() key `value`
+//   rawconstant: value  float|vector  (required)  used as is (no color conversion)
 #include "core/param.h"
 #include "scene/textures/textures.h"
 
@@ -14,12 +14,12 @@ namespace {
 
 class ConstantTexture final : public TextureBase<ConstantTexture> {
   public:
-    explicit ConstantTexture(const Color3f& value, std::string key = "")
-        : value_(value), key_(std::move(key)) {}
+    explicit ConstantTexture(const Color3f& value) : value_(value) {}
     template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>&) const {
         return param_color<T>(value_, index_);
     }
-    void traverse(ParamVisitor& v) override { v.put(key_, &value_.x, 3, &index_); }
+    // Mitsuba's srgb, uniform and rawconstant textures all name their value `value`.
+    void traverse(ParamVisitor& v) override { v.put("value", &value_.x, 3, &index_); }
     Color3f mean() const override { return value_; }
     bool is_constant() const override { return true; }
     std::string to_string() const override {
@@ -29,7 +29,6 @@ class ConstantTexture final : public TextureBase<ConstantTexture> {
 
   private:
     Color3f value_;
-    std::string key_; // traverse() name: "" (the parameter the texture stands for) or rawconstant's "value"
     int index_ = -1;
 };
 
@@ -53,7 +52,7 @@ std::shared_ptr<Texture> make_rawconstant_texture(const Properties& props) {
         props.raise("value", "rawconstant: 'value' must be a float or a vector");
     const Color3f value =
         tag == Properties::Tag::Float ? Color3f(props.get_float("value")) : props.get_vector("value");
-    return std::make_shared<ConstantTexture>(value, "value");
+    return make_constant_texture(value);
 }
 
 } // namespace penumbra
