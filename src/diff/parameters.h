@@ -13,10 +13,8 @@
 //                      scales about the origin, as Mitsuba's tests do)
 //   <sensor>.translate / <sensor>.rotate        the camera moves (world axes; rotation about its position)
 // Instances (<shape type="instance">) are flattened into world-space shapes first (Scene::flatten_instances):
-//   <instance id>.translate/rotate/scale        all shapes of that instance together (center: their bounding
-//   box) <group shape>.vertex_positions              group-space positions; copy k moves by the linear part
-//   of its
-//                                               instance's to_world
+//   <instance id>.translate/rotate/scale   all shapes of the instance together (center: their bounding box)
+//   <group shape>.vertex_positions         group-space positions (copies move by their to_world's linear map)
 #pragma once
 #include "scene/scene.h"
 
