@@ -12,6 +12,9 @@
 //   <shape>.rotate@cx,cy,cz, <shape>.scale@cx,cy,cz: the same about the world point c (plane.scale@0,0,0
 //                      scales about the origin, as Mitsuba's tests do)
 //   <sensor>.translate / <sensor>.rotate        the camera moves (world axes; rotation about its position)
+// Instances (<shape type="instance">) are flattened into world-space shapes first (Scene::flatten_instances):
+//   <instance id>.translate/rotate/scale   all shapes of the instance together (center: their bounding box)
+//   <group shape>.vertex_positions         group-space positions (copies move by their to_world's linear map)
 #pragma once
 #include "scene/scene.h"
 
@@ -31,6 +34,7 @@ struct Parameter {
     int* index = nullptr;   // Data: where the object reads its parameter index (core/param.h)
     bool geometry = false;  // changing it moves geometry (the BVH must be rebuilt)
     Shape* shape = nullptr; // motions of shapes, and vertex_positions
+    std::vector<Shape*> shapes; // motions of an instance of a group with several shapes: its flattened copies
     bool sensor = false;    // motions of the camera
 };
 
@@ -74,7 +78,7 @@ public:
     const std::vector<Motion>& motions(const Shape* shape) const;
     const std::vector<Motion>& sensor_motions() const { return sensor_motions_; }
     // Whether the enabled parameters move the shape (a motion, or its vertex positions).
-    bool moves(const Shape& shape) const { return !motions(&shape).empty() || shape.vertex_param_index >= 0; }
+    bool moves(const Shape& shape) const { return !motions(&shape).empty() || shape.vertex_index() >= 0; }
 
     // Values of the enabled parameters (motions read 0: they are displacements from the reference).
     std::vector<float> values() const;
