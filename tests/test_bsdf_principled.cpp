@@ -511,9 +511,12 @@ TEST(Principled, LoaderAcceptsMitsubasParametersAndRejectsBadOnes) {
         <float name="main_specular_sampling_rate" value="1"/><float name="clearcoat_sampling_rate" value="0.5"/>
         <float name="diffuse_reflectance_sampling_rate" value="1"/></bsdf>)";
     const auto names = parameter_names(bsdf_scene(all));
-    for (const char* key : {"mat.base_color", "mat.roughness", "mat.metallic", "mat.specular",
-                            "mat.spec_tint", "mat.anisotropic", "mat.sheen", "mat.sheen_tint",
-                            "mat.clearcoat", "mat.clearcoat_gloss", "mat.spec_trans", "mat.flatness"})
+    // Textured parameters are named by their constant texture's key, `value` (Mitsuba's `base_color.value`);
+    // `specular` and `eta` of principled are plain floats.
+    for (const char* key : {"mat.base_color.value", "mat.roughness.value", "mat.metallic.value", "mat.specular",
+                            "mat.spec_tint.value", "mat.anisotropic.value", "mat.sheen.value",
+                            "mat.sheen_tint.value", "mat.clearcoat.value", "mat.clearcoat_gloss.value",
+                            "mat.spec_trans.value", "mat.flatness.value"})
         EXPECT_TRUE(contains(names, key)) << key;
     EXPECT_FALSE(contains(names, "mat.eta"));
     EXPECT_TRUE(contains(parameter_names(bsdf_scene(
@@ -527,7 +530,8 @@ TEST(Principled, LoaderAcceptsMitsubasParametersAndRejectsBadOnes) {
         <float name="specular_reflectance_sampling_rate" value="1"/><float name="specular_transmittance_sampling_rate" value="1"/>
         <float name="diffuse_reflectance_sampling_rate" value="1"/><float name="diffuse_transmittance_sampling_rate" value="1"/></bsdf>)";
     const auto thin_names = parameter_names(bsdf_scene(thin));
-    for (const char* key : {"mat.eta", "mat.diff_trans", "mat.base_color", "mat.roughness", "mat.spec_trans"})
+    for (const char* key : {"mat.eta.value", "mat.diff_trans.value", "mat.base_color.value", "mat.roughness.value",
+                            "mat.spec_trans.value"})
         EXPECT_TRUE(contains(thin_names, key)) << key;
     // A texture where Mitsuba takes one.
     EXPECT_NO_THROW(load_scene_string(
