@@ -187,3 +187,24 @@ TEST(EmitterMotion, DisplaceMovesTheLightAndRestoresIt) {
     params.displace(*s, 0.0);
     EXPECT_EQ(s->emitters[0]->sample_direction(ref, Vec2f(0.5f)).first.p.y, 2.f);
 }
+
+// A projector translating and turning above the floor, which lies wholly inside its frustum (the frustum's
+// border, a jump, falls on nothing): the projected image's uv and the 1/d² fall-off move.
+TEST(EmitterMotion, MovingProjectorSlidesItsImage) {
+    TempDir dir;
+    Image slide(16, 16);
+    for (int y = 0; y < slide.height; ++y)
+        for (int x = 0; x < slide.width; ++x)
+            slide.at(x, y) = Color3f(1.f + float(x) / 4.f, 1.f + float(y) / 8.f, 2.f);
+    write_image(dir.str() + "/slide.exr", slide);
+    for (const std::string param : {"projector.translate=1,0,0.5", "projector.rotate=0,0.3,1"}) {
+        auto s = load_scene_string(scene(camera_and_floor + R"(
+    <emitter type="projector" id="projector">
+        <float name="fov" value="130"/>
+        <texture type="bitmap" name="irradiance"><string name="filename" value="slide.exr"/></texture>
+        <transform name="to_world"><lookat origin="0.2, 3, 0" target="0.2, 0, 0" up="0, 0, -1"/></transform>
+    </emitter>)"),
+                                   dir.str());
+        expect_interior_matches(*s, param, 16, 256, 1e-2);
+    }
+}
