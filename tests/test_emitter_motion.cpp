@@ -1,6 +1,7 @@
 // Motions of lights (<emitter>.translate / <emitter>.rotate, diff/parameters.h) against finite differences:
 // the interior term's next-event segments see the moving light (its position, direction, cone or
 // environment), the direct boundary term the shadows it moves.
+#include "core/rng.h"
 #include "diff/psdr.h"
 #include "diff_check.h"
 #include "xml_test_util.h"
@@ -207,4 +208,35 @@ TEST(EmitterMotion, MovingProjectorSlidesItsImage) {
                                    dir.str());
         expect_interior_matches(*s, param, 16, 256, 1e-2);
     }
+}
+
+// Reverse mode (`penumbra gradient`) takes the light's motion too: ⟨a, (interior + direct) v⟩ = ⟨gradient, v⟩
+// on the same samples, the direct term being a sizeable part.
+TEST(EmitterMotion, ReverseModeMatchesForwardMode) {
+    auto s = load_scene(validation + "shadow.xml", {{"res", "16"}, {"light", "point"}});
+    Parameters params(*s);
+    params.enable({parse_param_selection("bulb.translate=1,0,0")});
+    PsdrOptions o;
+    o.interior.spp = 4;
+    o.interior.seed = 5;
+    o.interior.path = path_settings(*s);
+    o.primary_spp = 0;
+    o.direct_spp = 64;
+    o.indirect_spp = 0;
+    const PsdrDerivative forward = psdr_derivative(*s, params, o);
+    Image adjoint(16, 16);
+    PCG32 rng(3);
+    for (auto& a : adjoint.pixels)
+        a = Color3f(rng.next_float(), rng.next_float(), rng.next_float());
+    const Gradient reverse = psdr_gradient(*s, params, adjoint, o);
+    double lhs = 0, scale = 0, direct = 0;
+    for (size_t i = 0; i < adjoint.pixels.size(); ++i) {
+        const Vec3d a(adjoint.pixels[i]);
+        lhs += dot(a, Vec3d(forward.total.pixels[i]));
+        scale += std::abs(dot(a, Vec3d(forward.total.pixels[i])));
+        direct += std::abs(dot(a, Vec3d(forward.direct.pixels[i])));
+    }
+    EXPECT_GT(direct, 0.05 * scale);
+    EXPECT_NEAR(lhs, reverse.values[0], 1e-4 * scale + 1e-6)
+        << "⟨a, Jv⟩ = " << lhs << ", ⟨Jᵀa, v⟩ = " << reverse.values[0];
 }
