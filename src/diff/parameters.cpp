@@ -137,7 +137,6 @@ void Parameters::add_motions(Scene& scene) {
             p.emitter = e;
             all_.push_back(p);
         }
-        saved_emitters_[e] = e->to_world();
     }
 }
 
@@ -282,6 +281,8 @@ void Parameters::displace(Scene& scene, double t) {
     }
     if (!sensor_motions_.empty() || !(scene.sensor->to_world.matrix == to_world.matrix))
         scene.sensor->set_transform(to_world);
+    for (const auto& [p, index] : enabled_)
+        if (p->emitter) saved_emitters_.try_emplace(p->emitter, p->emitter->to_world());
     for (auto& [emitter, reference] : saved_emitters_) {
         Transform placed = reference;
         for (const Motion& m : emitter_motions(emitter))
