@@ -62,6 +62,13 @@ int cmd_info(const std::string& scene_path, const std::vector<std::string>& defi
         if (s->degenerate_count()) std::printf("  (%zu degenerate triangles)", s->degenerate_count());
         std::printf("\n");
     }
+    if (!scene->instances.empty()) {
+        std::printf("instances: %zu (%zu triangles placed; each shapegroup's stored once)\n", scene->instances.size(),
+                    scene->instanced_triangle_count());
+        for (const auto& inst : scene->instances)
+            std::printf("  %-16s of group %-16s %zu shape(s)\n", inst->id.empty() ? "-" : inst->id.c_str(),
+                        inst->group->id.empty() ? "-" : inst->group->id.c_str(), inst->group->shapes.size());
+    }
     std::printf("emitters: %zu\n", scene->emitters.size());
     for (const auto& e : scene->emitters)
         std::printf("  %-12s %s\n", e->plugin.c_str(), e->id.empty() ? "-" : e->id.c_str());

@@ -1,5 +1,6 @@
 // shapegroup / instance: geometry stored once per group, instance interactions equal to those of the
-// flattened shapes, projected areas, Mitsuba's errors, and derivatives refused.
+// flattened shapes, projected areas, Mitsuba's errors, and flattening for derivatives
+// (test_shape_instance_diff.cpp checks the derivatives).
 #include "diff/parameters.h"
 #include "scene/scene.h"
 
@@ -137,14 +138,17 @@ TEST(ShapeInstance, ErrorsMirrorMitsuba) {
               std::string::npos);
 }
 
-TEST(ShapeInstance, DerivativesAreRefusedClearly) {
-    const auto scene = load_scene_string(
-        test::scene(std::string(group_xml) + R"(<shape type="instance"><ref id="group"/></shape>)"));
-    try {
-        Parameters params(*scene);
-        ADD_FAILURE() << "derivatives of an instanced scene were accepted";
-    } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("derivatives of scenes with instances"), std::string::npos)
-            << e.what();
-    }
+// Parameters flattens the instances (Scene::flatten_instances): their geometry reaches the estimators.
+TEST(ShapeInstance, DerivativesFlattenTheInstances) {
+    const auto scene = load_scene_string(test::scene(
+        std::string(group_xml) + R"(<shape type="instance" id="inst"><ref id="group"/></shape>)"));
+    const size_t triangles = scene->instanced_triangle_count();
+    Parameters params(*scene);
+    EXPECT_TRUE(scene->instances.empty());
+    ASSERT_EQ(scene->shapes.size(), 2u);
+    EXPECT_EQ(scene->shapes[0]->id, "inst.0");
+    EXPECT_EQ(scene->shapes[1]->id, "inst.1");
+    EXPECT_EQ(scene->triangle_count(), triangles);
+    EXPECT_NO_THROW(params.find("inst.translate"));
+    EXPECT_NO_THROW(params.find("group.0.vertex_positions"));
 }

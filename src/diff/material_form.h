@@ -18,10 +18,14 @@ struct MovedVertices {
 
     Vec3<Var> position(uint32_t v) const {
         const Vec3f p0 = shape.mesh.positions[v];
-        const int base = shape.vertex_param_index;
-        Vec3<Var> x = base < 0 ? Vec3<Var>(p0)
-                               : Vec3<Var>(Var::parameter(p0.x, base + 3 * int(v)), Var::parameter(p0.y, base + 3 * int(v) + 1),
-                                           Var::parameter(p0.z, base + 3 * int(v) + 2));
+        const int base = shape.vertex_index();
+        const auto leaf = [&](float value, int k) { return Var::parameter(value, base + 3 * int(v) + k); };
+        Vec3<Var> x(p0);
+        if (base >= 0 && !shape.group_shape) x = Vec3<Var>(leaf(p0.x, 0), leaf(p0.y, 1), leaf(p0.z, 2));
+        // A flattened instance copy: x = A g + b of its group shape's vertex g, so dx/dg = A (to_world's
+        // linear part).
+        if (base >= 0 && shape.group_shape)
+            x += shape.instance_to_world.apply_vector(Vec3<Var>(leaf(0.f, 0), leaf(0.f, 1), leaf(0.f, 2)));
         // dX/dθ at θ = 0: translate d, rotate a × (p - c), scale (p - c).
         for (const Motion& m : motions) {
             const Var theta = Var::parameter(0.f, m.index);

@@ -64,13 +64,38 @@ std::string shape_name(const Shape& shape, size_t index) {
     return shape.id.empty() ? "shape_" + std::to_string(index) : shape.id;
 }
 
-Vec3f bbox_center(const TriangleMesh& mesh) {
+// The center of the bounding box of the shapes' meshes.
+Vec3f bbox_center(const std::vector<Shape*>& shapes) {
     Vec3f lo(Infinity), hi(-Infinity);
-    for (const Vec3f& p : mesh.positions) {
-        lo = min(lo, p);
-        hi = max(hi, p);
-    }
+    for (const Shape* shape : shapes)
+        for (const Vec3f& p : shape->mesh.positions) {
+            lo = min(lo, p);
+            hi = max(hi, p);
+        }
     return (lo + hi) * 0.5f;
+}
+
+// The shapes a motion moves: the instance's copies, or its one shape.
+std::vector<Shape*> motion_shapes(const Parameter& p) {
+    return p.shapes.empty() ? std::vector<Shape*>{p.shape} : p.shapes;
+}
+
+// The shapes whose meshes change with a geometry parameter: those it moves, and the flattened copies of a
+// group shape whose vertex_positions it is.
+std::vector<Shape*> moved_shapes(const Parameter& p, const Scene& scene) {
+    if (!p.shape || !p.geometry) return {};
+    std::vector<Shape*> out = motion_shapes(p);
+    if (p.kind == Parameter::Kind::Data)
+        for (const auto& shape : scene.shapes)
+            if (shape->group_shape == p.shape) out.push_back(shape.get());
+    return out;
+}
+
+// Copies of moved group shapes follow their group shape's (new) vertices (finalize() follows).
+void update_moved(const std::set<Shape*>& moved) {
+    for (Shape* shape : moved)
+        if (shape->group_shape && moved.count(const_cast<Shape*>(shape->group_shape)))
+            shape->update_from_group();
 }
 
 // Rodrigues rotation of v about the unit axis a by angle t.
@@ -82,12 +107,8 @@ Vec3f rotate(const Vec3f& v, const Vec3f& a, float t) {
 } // namespace
 
 Parameters::Parameters(Scene& scene) {
-    // The estimators read world-space meshes (scene.shapes); instanced geometry would be silently missing
-    // from the boundary terms and misplaced in the interior term.
-    if (!scene.instances.empty())
-        throw Error("derivatives of scenes with instances (<shape type=\"instance\">) are not supported: "
-                    "instanced geometry is rendered but not seen by the derivative estimators; replace the "
-                    "instances by shapes to differentiate this scene");
+    // The estimators read world-space meshes (scene.shapes).
+    scene.flatten_instances();
     std::set<const Object*> seen;
     Collector root(all_, seen, "", nullptr);
     // Objects with ids first, so that shared objects are named by their id wherever they are used.
@@ -112,6 +133,21 @@ void Parameters::add_motions(Scene& scene) {
             p.kind = kind;
             p.geometry = true;
             p.shape = shape;
+            all_.push_back(p);
+        }
+    }
+    // An instance of a group with several shapes: its motions move all its copies.
+    for (const auto& [id, copies] : scene.instance_shapes) {
+        if (copies.size() < 2) continue;
+        for (auto [suffix, kind] :
+             {std::pair{"translate", Parameter::Kind::Translate},
+              std::pair{"rotate", Parameter::Kind::Rotate}, std::pair{"scale", Parameter::Kind::Scale}}) {
+            Parameter p;
+            p.name = id + "." + suffix;
+            p.kind = kind;
+            p.geometry = true;
+            p.shape = copies[0];
+            p.shapes = copies;
             all_.push_back(p);
         }
     }
@@ -214,8 +250,10 @@ void Parameters::enable(const std::vector<std::pair<std::string, std::vector<flo
             m.center = p.emitter->to_world().apply_point(Vec3f(0.f));
             emitter_motions_[p.emitter].push_back(m);
         } else {
-            m.center = center ? *center : bbox_center(p.shape->mesh);
-            shape_motions_[p.shape].push_back(m);
+            const std::vector<Shape*> shapes = motion_shapes(p);
+            m.center = center ? *center : bbox_center(shapes);
+            for (Shape* shape : shapes)
+                shape_motions_[shape].push_back(m);
         }
     }
 }
@@ -244,7 +282,8 @@ void Parameters::displace(Scene& scene, double t) {
     std::set<Shape*> moved;
     for (const auto& [p, index] : enabled_) {
         if (p->kind == Parameter::Kind::Data) saved_data_.try_emplace(p->data, p->data, p->data + p->size);
-        if (p->shape && p->geometry) moved.insert(p->shape);
+        for (Shape* shape : moved_shapes(*p, scene))
+            moved.insert(shape);
     }
     for (Shape* shape : moved) saved_meshes_.try_emplace(shape, shape->mesh.positions, shape->mesh.normals);
     for (auto& [data, values] : saved_data_) std::copy(values.begin(), values.end(), data);
@@ -256,6 +295,7 @@ void Parameters::displace(Scene& scene, double t) {
     for (const auto& [p, index] : enabled_)
         if (p->kind == Parameter::Kind::Data)
             for (int k = 0; k < p->size; ++k) p->data[k] += float(t * direction_[index + k]);
+    update_moved(moved);
     // 3. Motions, exactly (finite θ = t), on top.
     const float theta = float(t);
     for (Shape* shape : moved) {
@@ -312,8 +352,10 @@ void Parameters::set_values(Scene& scene, const std::vector<float>& values) {
         for (int k = 0; k < p->size; ++k)
             if (!std::isfinite(values[index + k])) throw Error("set_values: non-finite value for '" + p->name + "'");
         std::copy(values.begin() + index, values.begin() + index + p->size, p->data);
-        if (p->geometry && p->shape) moved.insert(p->shape);
+        for (Shape* shape : moved_shapes(*p, scene))
+            moved.insert(shape);
     }
+    update_moved(moved);
     for (Shape* shape : moved) shape->finalize();
     if (!moved.empty()) scene.build();
     saved_data_.clear(); // the new values are the reference configuration from now on

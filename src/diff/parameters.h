@@ -14,6 +14,9 @@
 //   <sensor>.translate / <sensor>.rotate        the camera moves (world axes; rotation about its position)
 //   <emitter>.translate / <emitter>.rotate      a point, spot or projector light moves (rotation about its
 //                      position); <emitter>.rotate turns a directional light's direction or an envmap
+// Instances (<shape type="instance">) are flattened into world-space shapes first (Scene::flatten_instances):
+//   <instance id>.translate/rotate/scale   all shapes of the instance together (center: their bounding box)
+//   <group shape>.vertex_positions         group-space positions (copies move by their to_world's linear map)
 #pragma once
 #include "scene/emitter.h"
 #include "scene/scene.h"
@@ -34,6 +37,7 @@ struct Parameter {
     int* index = nullptr;   // Data: where the object reads its parameter index (core/param.h)
     bool geometry = false;  // changing it moves geometry (the BVH must be rebuilt)
     Shape* shape = nullptr; // motions of shapes, and vertex_positions
+    std::vector<Shape*> shapes; // motions of an instance of a group with several shapes: its flattened copies
     bool sensor = false;    // motions of the camera
     Emitter* emitter = nullptr; // motions of a light
 };
@@ -80,7 +84,7 @@ public:
     // Motions of a light (rotations about its position: Motion::center).
     const std::vector<Motion>& emitter_motions(const Emitter* emitter) const;
     // Whether the enabled parameters move the shape (a motion, or its vertex positions).
-    bool moves(const Shape& shape) const { return !motions(&shape).empty() || shape.vertex_param_index >= 0; }
+    bool moves(const Shape& shape) const { return !motions(&shape).empty() || shape.vertex_index() >= 0; }
 
     // Values of the enabled parameters (motions read 0: they are displacements from the reference).
     std::vector<float> values() const;

@@ -141,6 +141,30 @@ void Scene::build() {
     }
 }
 
+void Scene::flatten_instances() {
+    if (instances.empty()) return;
+    for (const auto& instance : instances) {
+        const auto& group = instance->group->shapes;
+        for (size_t k = 0; k < group.size(); ++k) {
+            auto copy = std::make_shared<Shape>(*group[k]);
+            copy->group_shape = group[k].get();
+            copy->instance_to_world = instance->to_world;
+            copy->vertex_param_index = -1;
+            copy->update_from_group();
+            copy->finalize();
+            if (!instance->id.empty()) {
+                copy->id = group.size() == 1 ? instance->id
+                                             : instance->id + "." +
+                                                   (group[k]->id.empty() ? std::to_string(k) : group[k]->id);
+                instance_shapes[instance->id].push_back(copy.get());
+            }
+            shapes.push_back(std::move(copy));
+        }
+    }
+    instances.clear();
+    build();
+}
+
 static void to_embree(const Ray& ray, RTCRay& r) {
     r.org_x = ray.o.x;
     r.org_y = ray.o.y;

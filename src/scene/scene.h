@@ -33,6 +33,14 @@ public:
 
     // Builds the BVH, emitter bookkeeping and scene bounds. Must be called after the lists are filled.
     void build();
+    // Replaces every instance by world-space copies of its group's shapes (Shape::group_shape), named
+    // `<instance id>` (one group shape) or `<instance id>.<group shape id or index>`, and rebuilds the BVH.
+    // The derivative estimators read world-space meshes, so Parameters calls this: memory is then
+    // O(instances × group triangles) while differentiating; rendering alone keeps instancing. Shared
+    // geometry stays shared through the copies' group_shape (its vertex_positions moves them all).
+    void flatten_instances();
+    // After flatten_instances(): the copies of each instance that had an id, by that id.
+    std::map<std::string, std::vector<Shape*>> instance_shapes;
 
     SurfaceInteraction3f intersect(const Ray& ray) const;
     bool occluded(const Ray& ray) const;

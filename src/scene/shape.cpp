@@ -50,6 +50,12 @@ void Shape::finalize() {
     total_area_ = float(total);
 }
 
+void Shape::update_from_group() {
+    mesh.positions = group_shape->mesh.positions;
+    mesh.normals = group_shape->mesh.normals;
+    mesh.apply_transform(instance_to_world);
+}
+
 Vec3f Shape::face_normal(uint32_t prim) const {
     const Triangle t = triangle(mesh, prim);
     return normalize(cross(t.p1 - t.p0, t.p2 - t.p0));
@@ -83,7 +89,7 @@ SurfaceInteraction3f Shape::compute_surface_interaction(const Ray& ray, float t,
 // penumbra does not expose); their motions (translate, rotate, scale) are differentiated like any shape's.
 void Shape::traverse(ParamVisitor& v) {
     const bool curve = plugin == "linearcurve" || plugin == "bsplinecurve";
-    if (!mesh.positions.empty() && !curve)
+    if (!mesh.positions.empty() && !curve && !group_shape)
         v.put("vertex_positions", &mesh.positions[0].x, int(3 * mesh.vertex_count()), &vertex_param_index,
               true);
     if (bsdf) v.put_object("bsdf", bsdf.get());

@@ -25,8 +25,19 @@ public:
     std::shared_ptr<Sensor> sensor;   // a nested sensor measuring the shape (irradiancemeter), or null
     bool face_normals = false;        // ignore per-vertex normals
     int vertex_param_index = -1;      // first parameter index of vertex_positions when differentiated
+    // A world-space copy of a shapegroup's shape made by Scene::flatten_instances(): the group shape and the
+    // instance's to_world. Its vertices are the group shape's `vertex_positions` moved by that transform.
+    const Shape* group_shape = nullptr;
+    Transform instance_to_world;
 
-    // `vertex_positions` (geometry), and the nested bsdf and emitter.
+    // First parameter index of the vertex positions that move this mesh: its own, or its group shape's.
+    int vertex_index() const { return group_shape ? group_shape->vertex_param_index : vertex_param_index; }
+    // A flattened copy: the mesh recomputed from the group shape's (positions by to_world, normals by its
+    // inverse transpose, as TriangleMesh::apply_transform); finalize() must follow.
+    void update_from_group();
+
+    // `vertex_positions` (geometry; not for flattened copies, whose vertices are their group shape's), and
+    // the nested bsdf and emitter.
     void traverse(ParamVisitor& v) override;
 
     // Validates the mesh and builds the area distribution. Degenerate (zero-area) triangles are kept in the

@@ -6,8 +6,9 @@
 //  instance    to_world   transform  identity
 //              (one nested or referenced shapegroup, required)
 //
-// A shapegroup is a declaration: it renders only through instances. Derivatives of scenes with instances
-// are refused (diff/parameters.cpp): the estimators read world-space meshes.
+// A shapegroup is a declaration: it renders only through instances. To differentiate, Parameters flattens
+// the instances into world-space shapes (Scene::flatten_instances): `<instance id>.translate/rotate/scale`
+// move one instance, `<group shape>.vertex_positions` (group space) moves every instance of the group shape.
 #include "scene/shapes/instance.h"
 
 #include "scene/factory.h"
@@ -22,6 +23,11 @@ size_t ShapeGroup::triangle_count() const {
     for (const auto& s : shapes)
         n += s->mesh.face_count();
     return n;
+}
+
+void ShapeGroup::traverse(ParamVisitor& v) {
+    for (size_t k = 0; k < shapes.size(); ++k)
+        v.put_object(std::to_string(k), shapes[k].get());
 }
 
 std::string ShapeGroup::to_string() const {

@@ -14,6 +14,8 @@ class ShapeGroup : public Object {
   public:
     ObjectKind kind() const override { return ObjectKind::Shape; }
     std::string to_string() const override;
+    // Each shape, named by its id or `<group id>.<index>` (their vertex_positions move every instance).
+    void traverse(ParamVisitor& v) override;
     std::vector<std::shared_ptr<Shape>> shapes; // group space
     size_t triangle_count() const;
 };
