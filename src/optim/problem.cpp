@@ -48,7 +48,7 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
         } else {
             if (p.sensor || p.emitter)
                 throw Error("parameter '" + op.name +
-                            "': camera and light motions cannot be optimized, only shape poses");
+                            "': camera motions and light motions cannot be optimized, only shape poses");
             if (p.kind == Parameter::Kind::Scale)
                 throw Error("parameter '" + op.name +
                             "': scaling cannot be optimized; a pose is <shape>.translate and <shape>.rotate");
