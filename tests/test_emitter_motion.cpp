@@ -100,9 +100,9 @@ TEST(EmitterMotion, RotatingDirectionalLightMovesItsShadow) {
     expect_moving_light_shadow_matches("directional", "sun.rotate=0,0,1");
 }
 
-// (2) A spot light turning about its position: its falloff ring (beam_width < cutoff_angle, a continuous
-// profile) sweeps the floor.
-TEST(EmitterMotion, RotatingSpotLightMovesItsCone) {
+// (2) A spot light turning about its position, and translating: its falloff ring (beam_width < cutoff_angle,
+// a continuous profile) sweeps the floor.
+TEST(EmitterMotion, MovingSpotLightSweepsItsCone) {
     auto s = load_scene_string(scene(camera_and_floor + R"(
     <emitter type="spot" id="spot">
         <rgb name="intensity" value="20"/>
@@ -111,6 +111,7 @@ TEST(EmitterMotion, RotatingSpotLightMovesItsCone) {
         <transform name="to_world"><lookat origin="0.3, 3, 0" target="0, 0, 0" up="0, 0, 1"/></transform>
     </emitter>)"));
     expect_interior_matches(*s, "spot.rotate=1,0,0.3", 16, 256, 1e-2);
+    expect_interior_matches(*s, "spot.translate=0.5,-1,1", 16, 256, 1e-2);
 }
 
 // A spot light whose cone ends in a jump (beam_width = cutoff_angle) cannot move: the jump's motion is a
