@@ -169,7 +169,7 @@ void cmd_params(const Common& c) {
     for (const Parameter& p : params.all()) {
         const char* kind = p.kind == Parameter::Kind::Data        ? (p.geometry ? "geometry" : "value")
                            : p.kind == Parameter::Kind::Translate ? "motion (direction: world vector)"
-                           : p.sensor                             ? "motion (direction: world axis; radians)"
+                           : p.sensor || p.emitter                ? "motion (direction: world axis; radians)"
                            : p.kind == Parameter::Kind::Rotate
                                ? "motion (direction: world axis; radians; NAME@cx,cy,cz: about that center)"
                                : "motion (uniform scale; NAME@cx,cy,cz: about that center)";

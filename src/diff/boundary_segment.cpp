@@ -250,11 +250,15 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& f
     const Shape& edge_shape = *x_b.edge->shape;
     const Vec3<Var> a_t = form.position(edge_shape, x_b.edge->edge.v0), b_t = form.position(edge_shape, x_b.edge->edge.v1);
     const Vec3<Var> xb_t = a_t + (b_t - a_t) * Var(x_b.tau);
+    // A delta light's motion moves the apex (or turns the direction) the shadow is cast from.
+    const Emitter* light = source.emitter && source.emitter->is_delta() ? source.emitter : nullptr;
     const Vec3<Var> src_t =
-        source.infinite ? xb_t - Vec3<Var>(dir)
+        source.infinite ? xb_t - (light ? form.light_direction(*light, dir) : Vec3<Var>(dir))
         : source.shape  ? form.vertex(surface_interaction<float>(*source.shape, source.prim, source.bary,
-                                                                 MeshVertices{source.shape->mesh})).p
-                        : Vec3<Var>(source.p);
+                                                                MeshVertices{source.shape->mesh}))
+                             .p
+        : light ? form.light_position(*light, source.p)
+                : Vec3<Var>(source.p);
     const Vec3<Var> q0 = form.position(*recv.shape, tri[0]), q1 = form.position(*recv.shape, tri[1]),
                     q2 = form.position(*recv.shape, tri[2]);
     const Vec3<Var> n_t = cross(q1 - q0, q2 - q0);

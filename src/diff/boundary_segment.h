@@ -75,6 +75,7 @@ struct SegmentSource {
     Vec2f bary;
     bool infinite = false;
     Vec3f d = Vec3f(0.f);
+    const Emitter* emitter = nullptr; // a point or directional light, whose motions move the source
 };
 
 struct BoundarySegment {

@@ -35,6 +35,18 @@ void check_emission_jumps(const Scene& scene, const Parameters& params) {
                     " jumps across it (the border of its frustum or cone, or nearest-filtered texels), a "
                     "boundary penumbra does not sample");
     }
+    // A moving light moves such jumps of its own light across every surface they fall on.
+    for (size_t k = 0; k < scene.emitters.size(); ++k) {
+        const Emitter& e = *scene.emitters[k];
+        if (params.emitter_motions(&e).empty()) continue;
+        for (const auto& shape : scene.shapes)
+            if (e.emission_jumps_on(shape->mesh))
+                throw Error(
+                    "derivatives w.r.t. the motion of the " + e.plugin + " emitter '" +
+                    (e.id.empty() ? "emitter_" + std::to_string(k) : e.id) +
+                    "' are not supported: its light jumps across the scene (the border of its frustum or "
+                    "cone, or nearest-filtered texels), a boundary penumbra does not sample");
+    }
 }
 
 } // namespace
@@ -68,6 +80,7 @@ BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edg
         if (!(ds.pdf > 0.f)) return out;
         light.p = ds.p;
         light.n = Vec3f(0.f);
+        light.emitter = emitter;
         if (emitter->is_infinite()) {
             light.infinite = true;
             light.d = ds.d * -1.f;

@@ -17,6 +17,8 @@ bool moves_geometry(const Scene& scene, const Parameters& params) {
     if (!params.sensor_motions().empty()) return true;
     for (const auto& shape : scene.shapes)
         if (params.moves(*shape)) return true;
+    for (const auto& emitter : scene.emitters)
+        if (!params.emitter_motions(emitter.get()).empty()) return true; // its shadows move
     return false;
 }
 

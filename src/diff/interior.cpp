@@ -49,7 +49,8 @@ Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sam
     ++rays.rays;
     const SurfaceInteraction3f first = scene.intersect(ray);
     if (!first.is_valid())
-        return Color3<Var>(settings.hide_emitters ? Color3f(0.f) : scene.eval_environment(ray.d) * ray_weight);
+        return settings.hide_emitters ? Color3<Var>(Var(0.f))
+                                      : form.environment(scene, ray.d) * Color3<Var>(ray_weight);
     SurfaceInteraction<Var> x1 = form.ray_vertex(first, ray);
     x1.wi = x1.to_local(Vec3<Var>(ray.d * -1.f));
     return trace_path<Var>(scene, sampler, ray, first, x1, form, settings, rays) * Color3<Var>(ray_weight);
@@ -69,9 +70,10 @@ Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sa
     ++rays.rays;
     const SurfaceInteraction3f first = scene.intersect(ray);
     if (!first.is_valid()) {
-        // The environment seen through the film is a direction: it does not move with θ.
+        // The environment seen through the film is a direction: only its own rotation changes it.
         const float w = sensor.film->filter_weight(x, y, center + fs.offset) / fs.pdf;
-        return Color3<Var>(settings.hide_emitters ? Color3f(0.f) : scene.eval_environment(ray.d) * ray_weight * w);
+        return settings.hide_emitters ? Color3<Var>(Var(0.f))
+                                      : form.environment(scene, ray.d) * Color3<Var>(ray_weight * w);
     }
 
     SurfaceInteraction<Var> x1 = form.vertex(first);

@@ -113,6 +113,50 @@ public:
         return y;
     }
 
+    // A moving light (first order at θ = 0): its position x_e + θ d (rotations are about x_e), and a
+    // direction it emits along or arrives from, R(a, θ) d.
+    Vec3<Var> light_position(const Emitter& e, const Vec3f& x_e) const {
+        Vec3<Var> y(x_e);
+        for (const Motion& m : params_.emitter_motions(&e))
+            if (m.kind == Parameter::Kind::Translate) y += Vec3<Var>(m.vector) * Var::parameter(0.f, m.index);
+        return y;
+    }
+    Vec3<Var> light_direction(const Emitter& e, const Vec3f& d) const {
+        Vec3<Var> y(d);
+        for (const Motion& m : params_.emitter_motions(&e))
+            if (m.kind == Parameter::Kind::Rotate)
+                y += Vec3<Var>(cross(m.vector, d)) * Var::parameter(0.f, m.index);
+        return y;
+    }
+    // The inverse motion applied to a receiver point x (or a direction d): the reference light's emission at
+    // the result is the moved light's at x, since the light is rigid.
+    Vec3<Var> to_reference_light(const Emitter& e, const Vec3<Var>& x) const {
+        Vec3<Var> y = x;
+        for (const Motion& m : params_.emitter_motions(&e)) {
+            const Var theta = Var::parameter(0.f, m.index);
+            if (m.kind == Parameter::Kind::Translate)
+                y -= Vec3<Var>(m.vector) * theta;
+            else
+                y -= Vec3<Var>(cross(m.vector, Vec3f(x.x.v, x.y.v, x.z.v) - m.center)) * theta;
+        }
+        return y;
+    }
+    Vec3<Var> direction_to_reference_light(const Emitter& e, const Vec3f& d) const {
+        Vec3<Var> y(d);
+        for (const Motion& m : params_.emitter_motions(&e))
+            if (m.kind == Parameter::Kind::Rotate)
+                y -= Vec3<Var>(cross(m.vector, d)) * Var::parameter(0.f, m.index);
+        return y;
+    }
+    // Radiance of the infinite emitters along the escaped world direction d.
+    Color3<Var> environment(const Scene& scene, const Vec3f& d) const {
+        Color3<Var> L(Var(0.f));
+        for (const auto& e : scene.emitters)
+            if (e->is_infinite() && !e->is_delta())
+                L += e->eval_environment(direction_to_reference_light(*e, d));
+        return L;
+    }
+
 private:
     MovedVertices vertices(const Shape& shape) const { return {shape, params_.motions(&shape)}; }
     const Parameters& params_;

@@ -159,6 +159,21 @@ void Parameters::add_motions(Scene& scene) {
         p.sensor = true;
         all_.push_back(p);
     }
+    // Lights with a placement: point, spot and projector lights translate and rotate about their position;
+    // directional lights and envmaps rotate.
+    for (size_t i = 0; i < scene.emitters.size(); ++i) {
+        Emitter* e = scene.emitters[i].get();
+        if (!e->movable()) continue;
+        for (auto [suffix, kind] : {std::pair{"translate", Parameter::Kind::Translate},
+                                    std::pair{"rotate", Parameter::Kind::Rotate}}) {
+            if (kind == Parameter::Kind::Translate && e->is_infinite()) continue;
+            Parameter p;
+            p.name = (e->id.empty() ? "emitter_" + std::to_string(i) : e->id) + "." + suffix;
+            p.kind = kind;
+            p.emitter = e;
+            all_.push_back(p);
+        }
+    }
 }
 
 const Parameter& Parameters::find(const std::string& name) const {
@@ -184,6 +199,7 @@ void Parameters::disable_all() {
     dimension_ = 0;
     shape_motions_.clear();
     sensor_motions_.clear();
+    emitter_motions_.clear();
 }
 
 void Parameters::enable(const std::vector<std::pair<std::string, std::vector<float>>>& selection) {
@@ -192,7 +208,8 @@ void Parameters::enable(const std::vector<std::pair<std::string, std::vector<flo
     for (const auto& [selected, dir] : selection) {
         const auto [name, center] = split_motion_center(selected);
         const Parameter& p = find(name);
-        if (center && (p.sensor || (p.kind != Parameter::Kind::Rotate && p.kind != Parameter::Kind::Scale)))
+        if (center && (p.sensor || p.emitter ||
+                       (p.kind != Parameter::Kind::Rotate && p.kind != Parameter::Kind::Scale)))
             throw Error("parameter '" + selected +
                         "': a center (@x,y,z) applies to the rotate and scale motions of shapes");
         // A motion may be selected several times (e.g. the three axes of a translation), each with its own θ.
@@ -229,6 +246,9 @@ void Parameters::enable(const std::vector<std::pair<std::string, std::vector<flo
         }
         if (p.sensor) {
             sensor_motions_.push_back(m);
+        } else if (p.emitter) {
+            m.center = p.emitter->to_world().apply_point(Vec3f(0.f));
+            emitter_motions_[p.emitter].push_back(m);
         } else {
             const std::vector<Shape*> shapes = motion_shapes(p);
             m.center = center ? *center : bbox_center(shapes);
@@ -249,6 +269,12 @@ const std::vector<Motion>& Parameters::motions(const Shape* shape) const {
     static const std::vector<Motion> none;
     auto it = shape_motions_.find(shape);
     return it == shape_motions_.end() ? none : it->second;
+}
+
+const std::vector<Motion>& Parameters::emitter_motions(const Emitter* emitter) const {
+    static const std::vector<Motion> none;
+    auto it = emitter_motions_.find(emitter);
+    return it == emitter_motions_.end() ? none : it->second;
 }
 
 void Parameters::displace(Scene& scene, double t) {
@@ -295,6 +321,18 @@ void Parameters::displace(Scene& scene, double t) {
     }
     if (!sensor_motions_.empty() || !(scene.sensor->to_world.matrix == to_world.matrix))
         scene.sensor->set_transform(to_world);
+    for (const auto& [p, index] : enabled_)
+        if (p->emitter) saved_emitters_.try_emplace(p->emitter, p->emitter->to_world());
+    for (auto& [emitter, reference] : saved_emitters_) {
+        Transform placed = reference;
+        for (const Motion& m : emitter_motions(emitter))
+            placed = (m.kind == Parameter::Kind::Translate
+                          ? Transform::translate(m.vector * theta)
+                          : Transform::translate(m.center) * Transform::rotate(m.vector, degrees(theta)) *
+                                Transform::translate(-m.center)) *
+                     placed;
+        emitter->set_to_world(placed);
+    }
     if (!moved.empty()) scene.build();
 }
 

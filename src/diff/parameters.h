@@ -12,10 +12,13 @@
 //   <shape>.rotate@cx,cy,cz, <shape>.scale@cx,cy,cz: the same about the world point c (plane.scale@0,0,0
 //                      scales about the origin, as Mitsuba's tests do)
 //   <sensor>.translate / <sensor>.rotate        the camera moves (world axes; rotation about its position)
+//   <emitter>.translate / <emitter>.rotate      a point, spot or projector light moves (rotation about its
+//                      position); <emitter>.rotate turns a directional light's direction or an envmap
 // Instances (<shape type="instance">) are flattened into world-space shapes first (Scene::flatten_instances):
 //   <instance id>.translate/rotate/scale   all shapes of the instance together (center: their bounding box)
 //   <group shape>.vertex_positions         group-space positions (copies move by their to_world's linear map)
 #pragma once
+#include "scene/emitter.h"
 #include "scene/scene.h"
 
 #include <map>
@@ -36,6 +39,7 @@ struct Parameter {
     Shape* shape = nullptr; // motions of shapes, and vertex_positions
     std::vector<Shape*> shapes; // motions of an instance of a group with several shapes: its flattened copies
     bool sensor = false;    // motions of the camera
+    Emitter* emitter = nullptr; // motions of a light
 };
 
 // A motion in use: which parameter index drives it and how (first-order form at θ = 0).
@@ -77,6 +81,8 @@ public:
     // Motions driving a shape / the camera (empty when none is enabled).
     const std::vector<Motion>& motions(const Shape* shape) const;
     const std::vector<Motion>& sensor_motions() const { return sensor_motions_; }
+    // Motions of a light (rotations about its position: Motion::center).
+    const std::vector<Motion>& emitter_motions(const Emitter* emitter) const;
     // Whether the enabled parameters move the shape (a motion, or its vertex positions).
     bool moves(const Shape& shape) const { return !motions(&shape).empty() || shape.vertex_index() >= 0; }
 
@@ -98,10 +104,12 @@ private:
     int dimension_ = 0;
     std::map<const Shape*, std::vector<Motion>> shape_motions_;
     std::vector<Motion> sensor_motions_;
+    std::map<const Emitter*, std::vector<Motion>> emitter_motions_;
     // Reference values of everything displace() may change.
     std::map<float*, std::vector<float>> saved_data_;
     std::map<Shape*, std::pair<std::vector<Vec3f>, std::vector<Vec3f>>> saved_meshes_;
     Transform saved_sensor_;
+    std::map<Emitter*, Transform> saved_emitters_;
 };
 
 // Parses "name" or "name=v1,v2,..." (the CLI's --param syntax).

@@ -46,9 +46,9 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
             data_selection_.emplace_back(op.name, std::vector<float>{});
             if (p.geometry && p.shape) deformed.insert(p.shape);
         } else {
-            if (p.sensor)
+            if (p.sensor || p.emitter)
                 throw Error("parameter '" + op.name +
-                            "': camera motions cannot be optimized, only shape poses");
+                            "': camera motions and light motions cannot be optimized, only shape poses");
             if (p.kind == Parameter::Kind::Scale)
                 throw Error("parameter '" + op.name +
                             "': scaling cannot be optimized; a pose is <shape>.translate and <shape>.rotate");

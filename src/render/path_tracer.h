@@ -55,15 +55,19 @@ Color3<T> next_event_contribution(const BSDFContext& ctx, const BSDF* bsdf, cons
         return bsdf->eval(ctx, si, si.to_local(wo)) * emitter->eval(y) *
                (relative_change(g * geometry.jacobian(light_hit)) / T(ds.pdf));
     }
-    const Vec3<T> wo(ds.d);
     if (emitter->is_delta()) {
-        // Point, spot, directional: f_s times the emitter's incident term at x (Eq. 24); toward a point light
-        // the direction moves with x.
-        const Vec3<T> to_light = emitter->is_infinite() ? wo : normalize(Vec3<T>(ds.p) - si.p);
-        return bsdf->eval(ctx, si, si.to_local(to_light)) * emitter->eval_delta(si.p) / T(ds.pdf);
+        // Point, spot, directional: f_s times the emitter's incident term at x (Eq. 24), evaluated on the
+        // reference light at x moved by the light's inverse motion; toward a point light the direction moves
+        // with x and with the light, a directional light's turns with it.
+        const Vec3<T> to_light = emitter->is_infinite()
+                                     ? geometry.light_direction(*emitter, ds.d)
+                                     : normalize(geometry.light_position(*emitter, ds.p) - si.p);
+        return bsdf->eval(ctx, si, si.to_local(to_light)) *
+               emitter->eval_delta(geometry.to_reference_light(*emitter, si.p)) / T(ds.pdf);
     }
-    // Environment: a direction, independent of θ.
-    return bsdf->eval(ctx, si, si.to_local(wo)) * emitter->eval_environment(wo) / T(ds.pdf);
+    // Environment: a fixed direction, along which the (possibly rotating) environment is looked up.
+    return bsdf->eval(ctx, si, si.to_local(Vec3<T>(ds.d))) *
+           emitter->eval_environment(geometry.direction_to_reference_light(*emitter, ds.d)) / T(ds.pdf);
 }
 
 // Radiance leaving the first vertex of a path toward the sensor, estimated along one sampled path. `first` is
@@ -102,7 +106,12 @@ Color3<T> trace_path(const Scene& scene, Sampler& sampler, const Ray& primary, c
             for_each_emitter_hit(scene, prev_hit, ray.d, hit, [&](const Emitter* e, const Color3f& Le, float emitter_pdf) {
                 const float w = prev_bsdf_delta ? 1.f : mis_power(prev_bsdf_pdf, emitter_pdf);
                 if constexpr (reference) L += throughput * Le * w;
-                else L += throughput * (hit.is_valid() ? e->eval(si) : e->eval_environment(Vec3<T>(ray.d))) * T(w);
+                else
+                    L += throughput *
+                         (hit.is_valid()
+                              ? e->eval(si)
+                              : e->eval_environment(geometry.direction_to_reference_light(*e, ray.d))) *
+                         T(w);
             });
         }
         if (!hit.is_valid() || depth + 1 >= max_depth) break;

@@ -1,6 +1,7 @@
 // Emitter interface: area, point, spot, directional, constant (environment) and envmap lights.
 #pragma once
 #include "core/scalar.h"
+#include "core/transform.h"
 #include "scene/interaction.h"
 #include "scene/object.h"
 
@@ -57,6 +58,12 @@ public:
     // border, texel edges of a nearest-filtered projected texture, a spot without a falloff ring): a motion
     // of the mesh moves such a jump in its material frame, a boundary the estimators do not sample.
     virtual bool emission_jumps_on(const TriangleMesh&) const { return false; }
+    // The placement of point, spot, projector, directional and envmap lights (their emitter-to-world
+    // transform, light at the origin, emitting along local +z), which the emitter motions of
+    // diff/parameters.h move.
+    virtual bool movable() const { return false; }
+    virtual Transform to_world() const { return {}; }
+    virtual void set_to_world(const Transform&) {}
     // Total emitted power estimate (used to report; emitters are selected uniformly as in Mitsuba 3).
     virtual Color3f power() const { return Color3f(0.f); }
 

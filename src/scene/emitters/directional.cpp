@@ -69,8 +69,18 @@ public:
     // Eq. 27 of paper 001: the irradiance E arriving along the light's direction (visibility is tested apart).
     template <typename T> Color3<T> eval_delta_t(const Vec3<T>&) const { return param_color<T>(irradiance_, index_); }
     void traverse(ParamVisitor& v) override { v.put("irradiance.value", &irradiance_.x, 3, &index_); }
+    // A rotation taking local +z to d (the frame's s, t, n as columns).
+    bool movable() const override { return true; }
+    Transform to_world() const override {
+        const Frame3f f(d_);
+        Matrix4 m = Matrix4::identity();
+        for (int r = 0; r < 3; ++r)
+            m.m[r][0] = f.s[r], m.m[r][1] = f.t[r], m.m[r][2] = f.n[r];
+        return Transform(m, m.transpose());
+    }
+    void set_to_world(const Transform& t) override { d_ = normalize(t.apply_vector(Vec3f(0.f, 0.f, 1.f))); }
 
-private:
+  private:
     int index_ = -1;
     Vec3f d_; // unit world direction of propagation
     Color3f irradiance_;

@@ -121,6 +121,13 @@ public:
         v.put("data", &image_.pixels[0].x, 3 * int(image_.pixels.size()), &data_index_);
     }
 
+    bool movable() const override { return true; }
+    Transform to_world() const override { return to_world_; }
+    void set_to_world(const Transform& t) override {
+        to_world_ = t;
+        to_local_ = t.inverse();
+    }
+
     std::string to_string() const override {
         std::ostringstream os;
         os << "EnvmapEmitter[resolution = " << image_.width << "x" << image_.height << ", scale = " << scale_ << "]";

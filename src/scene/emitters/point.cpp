@@ -49,8 +49,11 @@ public:
         return param_color<T>(intensity_, index_) / squared_norm(Vec3<T>(position_) - p);
     }
     void traverse(ParamVisitor& v) override { v.put("intensity.value", &intensity_.x, 3, &index_); }
+    bool movable() const override { return true; }
+    Transform to_world() const override { return Transform::translate(position_); }
+    void set_to_world(const Transform& t) override { position_ = t.apply_point(Vec3f(0.f)); }
 
-private:
+  private:
     int index_ = -1;
     Vec3f position_;
     Color3f intensity_;

@@ -123,6 +123,14 @@ class ProjectorEmitter final : public EmitterBase<ProjectorEmitter> {
         return os.str();
     }
 
+    bool movable() const override { return true; }
+    Transform to_world() const override { return to_world_; }
+    void set_to_world(const Transform& t) override {
+        to_world_ = t;
+        to_local_ = t.inverse();
+        position_ = t.apply_point(Vec3f(0.f));
+    }
+
     void traverse(ParamVisitor& v) override {
         v.put_object("irradiance", irradiance_.get());
         v.put("scale", &scale_, 1, &scale_index_);

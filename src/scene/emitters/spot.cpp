@@ -104,6 +104,12 @@ public:
         v.put("intensity.value", &intensity_.x, 3, &index_);
         if (texture_) v.put_object("texture", texture_.get());
     }
+    bool movable() const override { return true; }
+    Transform to_world() const override { return to_world_; }
+    void set_to_world(const Transform& t) override {
+        to_world_ = t;
+        position_ = t.apply_point(Vec3f(0.f));
+    }
     // Without a falloff ring (beam_width = cutoff_angle) the cone's border is a jump, and so are the texel
     // edges of a nearest-filtered texture.
     bool emission_jumps_on(const TriangleMesh&) const override {
