@@ -75,6 +75,19 @@ TEST_F(TextureFixture, NearestUsesTopLeftOrigin) {
     EXPECT_EQ(at_uv(*tex, 0.3f, 0.7f), img.at(1, 1));
 }
 
+// Mitsuba's bitmap eval_1 (roughness, blend weights, opacity, bump heights) is the luminance of the texel color
+// (0.212671 R + 0.715160 G + 0.072169 B), not the channel mean; its uv gradient is the gradient of that.
+TEST_F(TextureFixture, SingleChannelValueIsTheLuminance) {
+    auto tex = bitmap("grid.exr", "nearest");
+    SurfaceInteraction3f si;
+    si.uv = Vec2f(0.3f, 0.7f); // texel (1, 1) = (1, 1, 15)
+    EXPECT_NEAR(tex->eval_1(si), 0.212671f + 0.715160f + 0.072169f * 15.f, Tol);
+    auto bilinear = bitmap("grid.exr");
+    si.uv = Vec2f(1.5f / 4.f, 0.5f / 2.f); // texel (1, 0) = (1, 0, 11): d/du = W (f(2,0) - f(1,0)) = 4 (R + B)
+    const Vec2f grad = bilinear->eval_1_grad(si);
+    EXPECT_NEAR(grad.x, 4.f * (0.212671f + 0.072169f), 1e-4f);
+}
+
 TEST_F(TextureFixture, BilinearInterpolatesBetweenTexelCenters) {
     auto tex = bitmap("grid.exr");
     // At a texel center the value is the texel itself.

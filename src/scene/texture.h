@@ -14,7 +14,7 @@ public:
     ObjectKind kind() const override { return ObjectKind::Texture; }
 #define PENUMBRA_TEXTURE_METHODS(T)                                                                          \
     virtual Color3<T> eval(const SurfaceInteraction<T>& si) const = 0;                                       \
-    /* Single-channel value (mean of the channels; used for alpha, weight, opacity). */                      \
+    /* Single-channel value (alpha, weight, height): channel mean; a bitmap's luminance. */                  \
     virtual T eval_1(const SurfaceInteraction<T>& si) const = 0;
     PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_TEXTURE_METHODS)
 #undef PENUMBRA_TEXTURE_METHODS

@@ -63,8 +63,15 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
         return top * (T(1.f) - wy) + bottom * wy;
     }
 
+    // Single-channel value: the luminance of the texel color, as Mitsuba's bitmap eval_1 (a gray bitmap gives its
+    // value: the weights sum to 1).
+#define PENUMBRA_BITMAP_EVAL_1(T)                                                                            \
+    T eval_1(const SurfaceInteraction<T>& si) const override { return luminance(eval_t<T>(si)); }
+    PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_BITMAP_EVAL_1)
+#undef PENUMBRA_BITMAP_EVAL_1
+
     // d eval_1 / d(u, v) of the bilinear interpolant (zero for nearest: piecewise constant), with eval_1 the
-    // channel mean: d/du = W [(f10 - f00)(1 - wy) + (f11 - f01) wy],
+    // luminance: d/du = W [(f10 - f00)(1 - wy) + (f11 - f01) wy],
     //               d/dv = H [(f01 - f00)(1 - wx) + (f11 - f10) wx], chained through the to_uv map.
     template <typename T> Vec2<T> eval_1_grad_t(const SurfaceInteraction<T>& si) const {
         if (!bilinear_) return Vec2<T>(T(0), T(0));
@@ -75,9 +82,8 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
         const int x0 = int(std::floor(detach(px))), y0 = int(std::floor(detach(py)));
         const T wx = px - T(float(x0)), wy = py - T(float(y0));
         const int xa = wrap(x0, w), xb = wrap(x0 + 1, w), ya = wrap(y0, h), yb = wrap(y0 + 1, h);
-        const auto mean = [](const Color3<T>& c) { return (c.x + c.y + c.z) * T(1.f / 3.f); };
-        const T f00 = mean(texel<T>(xa, ya)), f10 = mean(texel<T>(xb, ya));
-        const T f01 = mean(texel<T>(xa, yb)), f11 = mean(texel<T>(xb, yb));
+        const T f00 = luminance(texel<T>(xa, ya)), f10 = luminance(texel<T>(xb, ya));
+        const T f01 = luminance(texel<T>(xa, yb)), f11 = luminance(texel<T>(xb, yb));
         const T d_du = ((f10 - f00) * (T(1.f) - wy) + (f11 - f01) * wy) * float(w);
         const T d_dv = ((f01 - f00) * (T(1.f) - wx) + (f11 - f10) * wx) * float(h);
         return {d_du * to_uv_[0] + d_dv * to_uv_[3], d_du * to_uv_[1] + d_dv * to_uv_[4]};
