@@ -1,5 +1,5 @@
-// Field-of-view parameters shared by the perspective and thinlens cameras (Mitsuba's parse_fov()), and the
-// check that a camera transform has no scale.
+// Parameters shared by the perspective and thinlens cameras: the field of view (Mitsuba's parse_fov()), the
+// principal point offset, and the check that a camera transform has no scale.
 #include "scene/sensors/sensor_common.h"
 
 #include <cmath>
@@ -50,6 +50,9 @@ float parse_x_fov(const Properties& props, double aspect) {
     return float(result);
 }
 
+namespace {
+
+// Mitsuba's Transform::has_scale(): the linear part is not orthonormal (M M^T != I within 1e-3).
 bool has_scale(const Transform& t) {
     const auto& m = t.matrix.m;
     for (int i = 0; i < 3; ++i)
@@ -58,6 +61,16 @@ bool has_scale(const Transform& t) {
             if (std::abs(sum - (i == j ? 1.f : 0.f)) > 1e-3f) return true;
         }
     return false;
+}
+
+} // namespace
+
+PerspectiveParameters load_perspective_parameters(const Properties& props, const Sensor& camera) {
+    if (has_scale(camera.to_world))
+        props.raise("to_world", "scale factors in the camera-to-world transformation are not allowed");
+    const Vec2i size = camera.film->full_size;
+    return {parse_x_fov(props, double(size.x) / size.y),
+            Vec2f(props.get_float("principal_point_offset_x", 0.f), props.get_float("principal_point_offset_y", 0.f))};
 }
 
 } // namespace penumbra

@@ -24,19 +24,11 @@ class PerspectiveCamera final : public SensorBase<PerspectiveCamera, Perspective
     // Called once the film and the transform are set.
     void configure(float x_fov_deg, const Vec2f& principal_point_offset) {
         configure_perspective(x_fov_deg, principal_point_offset);
-        origin_ = to_world.apply_point(Vec3f(0.f));
     }
 
     std::pair<Ray, Color3f> sample_ray(const Vec2f& film_pos, const Vec2f&) const override {
         const Vec3f local = normalize(plane_point(film_pos));
         return {Ray(origin_, normalize(to_world.apply_vector(local)), far_clip / local.z), Color3f(1.f)};
-    }
-
-    bool project(const Vec3f& p, Vec2f& film_pos) const override {
-        const Vec3f q = to_local_.apply_point(p);
-        if (!(q.z >= near_clip && q.z <= far_clip)) return false;
-        film_pos = film_position_of(q.x / q.z, q.y / q.z);
-        return on_film(film_pos);
     }
 
     // Delta position: weight = W(d) / dist^2 with the importance of PerspectiveProjection.
@@ -65,33 +57,9 @@ class PerspectiveCamera final : public SensorBase<PerspectiveCamera, Perspective
         configure(x_fov_, ppo_);
     }
 
-    // s(p) as in project(), and |ds/dA| = (W H / A) cos θ_p / (d² cos³ θ_c): pixels per unit solid angle
-    // (W H / A / cos³ θ_c, A the image-plane area at distance 1) times dω/dA = cos θ_p / d².
-    template <typename T>
-    bool film_position_t(const Vec3<T>& p, const Vec3<T>& n, Vec2<T>& film_pos, T& jacobian) const {
-        using std::abs;
-        using std::sqrt;
-        const Vec3<T> q = to_local_.apply_point(p);
-        if (!(detach(q.z) > 0.f)) return false;
-        film_pos = film_position_of(q.x / q.z, q.y / q.z);
-        const Vec3<T> d = p - Vec3<T>(origin_);
-        const T dist2 = squared_norm(d);
-        const T dist = sqrt(dist2);
-        const T cos_c = q.z / dist;
-        const T cos_p = abs(dot(n, d)) / dist;
-        jacobian = T(size_.x * size_.y / plane_area_) * cos_p / (dist2 * cos_c * cos_c * cos_c);
-        return true;
-    }
-    template <typename T> Vec3<T> to_sensor_t(const Vec3<T>& p) const {
-        return normalize(Vec3<T>(origin_) - p);
-    }
-
     std::string to_string() const override {
         return "PerspectiveCamera[x_fov=" + std::to_string(x_fov_) + ", film=" + film->to_string() + "]";
     }
-
-  private:
-    Vec3f origin_;
 };
 
 } // namespace
@@ -99,13 +67,8 @@ class PerspectiveCamera final : public SensorBase<PerspectiveCamera, Perspective
 std::shared_ptr<Sensor> make_perspective_sensor(const Properties& props, const LoadContext& ctx) {
     auto camera = std::make_shared<PerspectiveCamera>();
     load_sensor_common(*camera, props, ctx);
-    if (has_scale(camera->to_world))
-        props.raise("to_world", "scale factors in the camera-to-world transformation are not allowed");
-    const Vec2i size = camera->film->full_size;
-    const float x_fov = parse_x_fov(props, double(size.x) / size.y);
-    const Vec2f ppo(props.get_float("principal_point_offset_x", 0.f),
-                    props.get_float("principal_point_offset_y", 0.f));
-    camera->configure(x_fov, ppo);
+    const PerspectiveParameters pp = load_perspective_parameters(props, *camera);
+    camera->configure(pp.x_fov, pp.principal_point_offset);
     return camera;
 }
 

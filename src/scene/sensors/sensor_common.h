@@ -22,8 +22,6 @@ std::shared_ptr<Sensor> make_irradiancemeter_sensor(const Properties& props, con
 // Mitsuba's parse_fov() (fov, fov_axis or focal_length): the horizontal field of view in degrees for an image
 // of the given aspect (W / H) (sensors/fov.cpp); also used by the projector emitter.
 float parse_x_fov(const Properties& props, double aspect);
-// Mitsuba's Transform::has_scale(): the linear part is not orthonormal (M M^T != I within 1e-3).
-bool has_scale(const Transform& t);
 
 // A camera that maps film positions (pixels, (0, 0) = top-left of the image) to rays along to_world's +z. The
 // projection covers the film's full frame; the image is its crop window (film.h), so a film position s is the
@@ -71,9 +69,42 @@ class ProjectiveCamera : public Sensor {
 // fraction s = ((px, py) + crop_offset) / size + principal_point_offset and to the camera-space point
 //   q(s) = (tan(fov_x / 2) (1 - 2 s_x), tan(fov_x / 2) (1 - 2 s_y) / aspect, 1)   on the plane z = 1.
 class PerspectiveProjection : public ProjectiveCamera {
+  public:
+    // The projection through the center of projection (a thin lens's chief ray).
+    bool project(const Vec3f& p, Vec2f& film_pos) const override {
+        const Vec3f q = to_local_.apply_point(p);
+        if (!(q.z >= near_clip && q.z <= far_clip)) return false;
+        film_pos = film_position_of(q.x / q.z, q.y / q.z);
+        return on_film(film_pos);
+    }
+
+    // s(p) as in project(), and |ds/dA| = (W H / A) cos θ_p / (d² cos³ θ_c): pixels per unit solid angle
+    // (W H / A / cos³ θ_c, A the image-plane area at distance 1) times dω/dA = cos θ_p / d². Exact for a
+    // pinhole; for a thin lens it is the lens center's, and the estimators that connect points to the camera
+    // refuse a finite aperture (diff/first_vertex.h, require_pinhole).
+    template <typename T>
+    bool film_position_t(const Vec3<T>& p, const Vec3<T>& n, Vec2<T>& film_pos, T& jacobian) const {
+        using std::abs;
+        using std::sqrt;
+        const Vec3<T> q = to_local_.apply_point(p);
+        if (!(detach(q.z) > 0.f)) return false;
+        film_pos = film_position_of(q.x / q.z, q.y / q.z);
+        const Vec3<T> d = p - Vec3<T>(origin_);
+        const T dist2 = squared_norm(d);
+        const T dist = sqrt(dist2);
+        const T cos_c = q.z / dist;
+        const T cos_p = abs(dot(n, d)) / dist;
+        jacobian = T(size_.x * size_.y / plane_area_) * cos_p / (dist2 * cos_c * cos_c * cos_c);
+        return true;
+    }
+    template <typename T> Vec3<T> to_sensor_t(const Vec3<T>& p) const {
+        return normalize(Vec3<T>(origin_) - p);
+    }
+
   protected:
     void configure_perspective(float x_fov_deg, const Vec2f& principal_point_offset) {
         configure_projection();
+        origin_ = to_world.apply_point(Vec3f(0.f));
         x_fov_ = x_fov_deg;
         tan_half_ = std::tan(0.5f * radians(x_fov_deg));
         ppo_ = principal_point_offset;
@@ -100,9 +131,18 @@ class PerspectiveProjection : public ProjectiveCamera {
         return crop_importance_scale() / (plane_area_ * cos_theta * cos_theta * cos_theta);
     }
 
+    Vec3f origin_; // world-space center of projection
     float x_fov_ = 0.f, tan_half_ = 0.f;
     Vec2f ppo_;
     float plane_area_ = 1.f;
 };
+
+// The parameters perspective and thinlens share: the horizontal field of view for the film's full frame and the
+// principal point offset; raises at `to_world` if the camera transform has a scale (as Mitsuba refuses it).
+struct PerspectiveParameters {
+    float x_fov;
+    Vec2f principal_point_offset;
+};
+PerspectiveParameters load_perspective_parameters(const Properties& props, const Sensor& camera);
 
 } // namespace penumbra

@@ -32,7 +32,6 @@ class ThinLensCamera final : public SensorBase<ThinLensCamera, PerspectiveProjec
         configure_perspective(x_fov_deg, principal_point_offset);
         aperture_radius_ = aperture_radius;
         focus_distance_ = focus_distance;
-        origin_ = to_world.apply_point(Vec3f(0.f));
     }
 
     bool projects_points() const override { return aperture_radius_ == 0.f; }
@@ -44,14 +43,6 @@ class ThinLensCamera final : public SensorBase<ThinLensCamera, PerspectiveProjec
         const float near_t = near_clip / d.z, far_t = far_clip / d.z;
         const Vec3f dir = normalize(to_world.apply_vector(d));
         return {Ray(to_world.apply_point(a) + dir * near_t, dir, far_t - near_t), Color3f(1.f)};
-    }
-
-    // The projection through the lens center (the chief ray).
-    bool project(const Vec3f& p, Vec2f& film_pos) const override {
-        const Vec3f q = to_local_.apply_point(p);
-        if (!(q.z >= near_clip && q.z <= far_clip)) return false;
-        film_pos = film_position_of(q.x / q.z, q.y / q.z);
-        return on_film(film_pos);
     }
 
     // Mitsuba's ThinLensCamera::sample_direction: a uniform aperture point a (area density 1 / (π r²)), the
@@ -88,28 +79,6 @@ class ThinLensCamera final : public SensorBase<ThinLensCamera, PerspectiveProjec
         configure(x_fov_, ppo_, aperture_radius_, focus_distance_);
     }
 
-    // The pinhole film position and Jacobian of the lens center (exact only for aperture_radius 0): the
-    // estimators that connect points to the camera refuse a finite aperture (diff/first_vertex.h,
-    // require_pinhole).
-    template <typename T>
-    bool film_position_t(const Vec3<T>& p, const Vec3<T>& n, Vec2<T>& film_pos, T& jacobian) const {
-        using std::abs;
-        using std::sqrt;
-        const Vec3<T> q = to_local_.apply_point(p);
-        if (!(detach(q.z) > 0.f)) return false;
-        film_pos = film_position_of(q.x / q.z, q.y / q.z);
-        const Vec3<T> d = p - Vec3<T>(origin_);
-        const T dist2 = squared_norm(d);
-        const T dist = sqrt(dist2);
-        const T cos_c = q.z / dist;
-        const T cos_p = abs(dot(n, d)) / dist;
-        jacobian = T(size_.x * size_.y / plane_area_) * cos_p / (dist2 * cos_c * cos_c * cos_c);
-        return true;
-    }
-    template <typename T> Vec3<T> to_sensor_t(const Vec3<T>& p) const {
-        return normalize(Vec3<T>(origin_) - p);
-    }
-
     std::string to_string() const override {
         return "ThinLensCamera[x_fov=" + std::to_string(x_fov_) +
                ", aperture_radius=" + std::to_string(aperture_radius_) +
@@ -118,7 +87,6 @@ class ThinLensCamera final : public SensorBase<ThinLensCamera, PerspectiveProjec
 
   private:
     float aperture_radius_ = 0.f, focus_distance_ = 1.f;
-    Vec3f origin_;
 };
 
 } // namespace
@@ -126,17 +94,12 @@ class ThinLensCamera final : public SensorBase<ThinLensCamera, PerspectiveProjec
 std::shared_ptr<Sensor> make_thinlens_sensor(const Properties& props, const LoadContext& ctx) {
     auto camera = std::make_shared<ThinLensCamera>();
     load_sensor_common(*camera, props, ctx);
-    if (has_scale(camera->to_world))
-        props.raise("to_world", "scale factors in the camera-to-world transformation are not allowed");
-    const Vec2i size = camera->film->full_size;
-    const float x_fov = parse_x_fov(props, double(size.x) / size.y);
-    const Vec2f ppo(props.get_float("principal_point_offset_x", 0.f),
-                    props.get_float("principal_point_offset_y", 0.f));
+    const PerspectiveParameters pp = load_perspective_parameters(props, *camera);
     const float radius = props.get_float("aperture_radius");
     if (!(radius >= 0.f)) props.raise("aperture_radius", "aperture_radius must not be negative");
     const float focus = props.get_float("focus_distance", camera->far_clip);
     if (!(focus > 0.f)) props.raise("focus_distance", "focus_distance must be positive");
-    camera->configure(x_fov, ppo, radius, focus);
+    camera->configure(pp.x_fov, pp.principal_point_offset, radius, focus);
     return camera;
 }
 
