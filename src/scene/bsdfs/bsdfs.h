@@ -36,38 +36,33 @@ BSDFPtr make_mask(TexturePtr opacity, BSDFPtr nested);
 BSDFPtr make_null_bsdf();
 BSDFPtr make_normalmap(TexturePtr normalmap, BSDFPtr nested);
 BSDFPtr make_bumpmap(TexturePtr height, float scale, BSDFPtr nested);
-// The parameters of `principled` (Mitsuba's defaults). has_spec_trans is Mitsuba's lobe flag: set when the
-// scene gives spec_trans other than the float 0 (it adds the transmission flag and keeps eta away from 1).
-struct PrincipledParams {
+// The parameters `principled` and `principledthin` share (Mitsuba's defaults). has_spec_trans is Mitsuba's
+// lobe flag: set when the scene gives spec_trans other than the float 0 (it adds the transmission flag and
+// keeps eta away from 1).
+struct PrincipledShared {
     TexturePtr base_color = make_constant_texture(Color3f(0.5f));
     TexturePtr roughness = make_constant_texture(Color3f(0.5f));
     TexturePtr anisotropic = make_constant_texture(Color3f(0.f));
-    TexturePtr metallic = make_constant_texture(Color3f(0.f));
     TexturePtr spec_trans = make_constant_texture(Color3f(0.f));
     TexturePtr spec_tint = make_constant_texture(Color3f(0.f));
     TexturePtr sheen = make_constant_texture(Color3f(0.f));
     TexturePtr sheen_tint = make_constant_texture(Color3f(0.f));
     TexturePtr flatness = make_constant_texture(Color3f(0.f));
+    bool has_spec_trans = false;
+};
+// The parameters of `principled` (Mitsuba's defaults).
+struct PrincipledParams : PrincipledShared {
+    TexturePtr metallic = make_constant_texture(Color3f(0.f));
     TexturePtr clearcoat = make_constant_texture(Color3f(0.f));
     TexturePtr clearcoat_gloss = make_constant_texture(Color3f(0.f));
-    bool has_spec_trans = false;
     bool eta_given = false; // the IOR is `eta` (else `specular`)
     float eta = 1.5f, specular = 0.5f;
     float spec_rate = 1.f, clearcoat_rate = 1.f, diffuse_rate = 1.f; // lobe sampling rates
 };
 // The parameters of `principledthin` (Mitsuba's defaults).
-struct PrincipledThinParams {
-    TexturePtr base_color = make_constant_texture(Color3f(0.5f));
-    TexturePtr roughness = make_constant_texture(Color3f(0.5f));
-    TexturePtr anisotropic = make_constant_texture(Color3f(0.f));
-    TexturePtr spec_trans = make_constant_texture(Color3f(0.f));
+struct PrincipledThinParams : PrincipledShared {
     TexturePtr eta = make_constant_texture(Color3f(1.5f));
-    TexturePtr spec_tint = make_constant_texture(Color3f(0.f));
-    TexturePtr sheen = make_constant_texture(Color3f(0.f));
-    TexturePtr sheen_tint = make_constant_texture(Color3f(0.f));
-    TexturePtr flatness = make_constant_texture(Color3f(0.f));
     TexturePtr diff_trans = make_constant_texture(Color3f(0.f));
-    bool has_spec_trans = false;
     float spec_reflect_rate = 1.f, spec_trans_rate = 1.f; // lobe sampling rates
     float diffuse_reflect_rate = 1.f, diffuse_trans_rate = 1.f;
 };

@@ -180,13 +180,7 @@ class PrincipledBSDF final : public BSDFBase<PrincipledBSDF> {
         else
             v.put("specular", &p_.specular, 1, &ior_index_);
         v.put_object("roughness", p_.roughness.get());
-        v.put_object("base_color", p_.base_color.get());
-        v.put_object("anisotropic", p_.anisotropic.get());
-        v.put_object("spec_tint", p_.spec_tint.get());
-        v.put_object("sheen", p_.sheen.get());
-        v.put_object("sheen_tint", p_.sheen_tint.get());
-        v.put_object("spec_trans", p_.spec_trans.get());
-        v.put_object("flatness", p_.flatness.get());
+        traverse_shared(v, p_);
     }
 
   private:
@@ -227,25 +221,13 @@ BSDFPtr make_principled(const PrincipledParams& params) { return std::make_share
 
 BSDFPtr load_principled(const Properties& props) {
     PrincipledParams p;
-    p.base_color = props.get_texture("base_color", Color3f(0.5f));
-    p.roughness = props.get_texture("roughness", Color3f(0.5f));
-    p.anisotropic = props.get_texture("anisotropic", Color3f(0.f));
+    load_shared(props, p);
     p.metallic = props.get_texture("metallic", Color3f(0.f));
-    p.has_spec_trans = lobe_enabled(props, "spec_trans");
-    p.spec_trans = props.get_texture("spec_trans", Color3f(0.f));
-    p.spec_tint = props.get_texture("spec_tint", Color3f(0.f));
-    p.sheen = props.get_texture("sheen", Color3f(0.f));
-    p.sheen_tint = props.get_texture("sheen_tint", Color3f(0.f));
-    p.flatness = props.get_texture("flatness", Color3f(0.f));
     p.clearcoat = props.get_texture("clearcoat", Color3f(0.f));
     p.clearcoat_gloss = props.get_texture("clearcoat_gloss", Color3f(0.f));
-    p.spec_rate = props.get_float("main_specular_sampling_rate", 1.f);
-    p.clearcoat_rate = props.get_float("clearcoat_sampling_rate", 1.f);
-    p.diffuse_rate = props.get_float("diffuse_reflectance_sampling_rate", 1.f);
-    for (const char* rate :
-         {"main_specular_sampling_rate", "clearcoat_sampling_rate", "diffuse_reflectance_sampling_rate"})
-        if (props.has(rate) && !(props.get_float(rate) >= 0.f))
-            props.raise(rate, "sampling rates must be >= 0");
+    p.spec_rate = sampling_rate(props, "main_specular_sampling_rate");
+    p.clearcoat_rate = sampling_rate(props, "clearcoat_sampling_rate");
+    p.diffuse_rate = sampling_rate(props, "diffuse_reflectance_sampling_rate");
     if (props.has("eta") && props.has("specular"))
         props.raise("specular", "specify either \"eta\" or \"specular\", not both");
     p.eta_given = props.has("eta");

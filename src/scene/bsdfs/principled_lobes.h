@@ -6,6 +6,7 @@
 #pragma once
 #include "core/microfacet.h"
 #include "core/vector.h"
+#include "scene/bsdfs/bsdfs.h"
 #include "scene/properties.h"
 
 #include <algorithm>
@@ -133,6 +134,37 @@ inline bool lobe_enabled(const Properties& props, const std::string& name) {
     const Properties::Tag tag = props.type(name);
     if (tag == Properties::Tag::Float || tag == Properties::Tag::Integer) return props.get_float(name) != 0.f;
     return true;
+}
+
+// Reads the parameters both principled models take, with Mitsuba's names and defaults.
+inline void load_shared(const Properties& props, PrincipledShared& p) {
+    p.base_color = props.get_texture("base_color", Color3f(0.5f));
+    p.roughness = props.get_texture("roughness", Color3f(0.5f));
+    p.anisotropic = props.get_texture("anisotropic", Color3f(0.f));
+    p.has_spec_trans = lobe_enabled(props, "spec_trans");
+    p.spec_trans = props.get_texture("spec_trans", Color3f(0.f));
+    p.spec_tint = props.get_texture("spec_tint", Color3f(0.f));
+    p.sheen = props.get_texture("sheen", Color3f(0.f));
+    p.sheen_tint = props.get_texture("sheen_tint", Color3f(0.f));
+    p.flatness = props.get_texture("flatness", Color3f(0.f));
+}
+
+// Lists the shared parameters under Mitsuba's keys (after each model's own leading ones, as Mitsuba does).
+inline void traverse_shared(ParamVisitor& v, const PrincipledShared& p) {
+    v.put_object("base_color", p.base_color.get());
+    v.put_object("anisotropic", p.anisotropic.get());
+    v.put_object("spec_tint", p.spec_tint.get());
+    v.put_object("sheen", p.sheen.get());
+    v.put_object("sheen_tint", p.sheen_tint.get());
+    v.put_object("spec_trans", p.spec_trans.get());
+    v.put_object("flatness", p.flatness.get());
+}
+
+// A lobe sampling rate (default 1); negative rates are a LoadError.
+inline float sampling_rate(const Properties& props, const char* name) {
+    const float rate = props.get_float(name, 1.f);
+    if (!(rate >= 0.f)) props.raise(name, "sampling rates must be >= 0");
+    return rate;
 }
 
 } // namespace penumbra::principled

@@ -147,13 +147,7 @@ class PrincipledThinBSDF final : public BSDFBase<PrincipledThinBSDF> {
         v.put_object("eta", p_.eta.get());
         v.put_object("roughness", p_.roughness.get());
         v.put_object("diff_trans", p_.diff_trans.get());
-        v.put_object("base_color", p_.base_color.get());
-        v.put_object("anisotropic", p_.anisotropic.get());
-        v.put_object("spec_tint", p_.spec_tint.get());
-        v.put_object("sheen", p_.sheen.get());
-        v.put_object("sheen_tint", p_.sheen_tint.get());
-        v.put_object("spec_trans", p_.spec_trans.get());
-        v.put_object("flatness", p_.flatness.get());
+        traverse_shared(v, p_);
     }
 
   private:
@@ -185,26 +179,13 @@ BSDFPtr make_principledthin(const PrincipledThinParams& params) {
 
 BSDFPtr load_principledthin(const Properties& props) {
     PrincipledThinParams p;
-    p.base_color = props.get_texture("base_color", Color3f(0.5f));
-    p.roughness = props.get_texture("roughness", Color3f(0.5f));
-    p.anisotropic = props.get_texture("anisotropic", Color3f(0.f));
-    p.has_spec_trans = lobe_enabled(props, "spec_trans");
-    p.spec_trans = props.get_texture("spec_trans", Color3f(0.f));
+    load_shared(props, p);
     p.eta = props.get_texture("eta", Color3f(1.5f));
-    p.spec_tint = props.get_texture("spec_tint", Color3f(0.f));
-    p.sheen = props.get_texture("sheen", Color3f(0.f));
-    p.sheen_tint = props.get_texture("sheen_tint", Color3f(0.f));
-    p.flatness = props.get_texture("flatness", Color3f(0.f));
     p.diff_trans = props.get_texture("diff_trans", Color3f(0.f));
-    const auto rate = [&](const char* name) {
-        const float r = props.get_float(name, 1.f);
-        if (!(r >= 0.f)) props.raise(name, "sampling rates must be >= 0");
-        return r;
-    };
-    p.spec_reflect_rate = rate("specular_reflectance_sampling_rate");
-    p.spec_trans_rate = rate("specular_transmittance_sampling_rate");
-    p.diffuse_reflect_rate = rate("diffuse_reflectance_sampling_rate");
-    p.diffuse_trans_rate = rate("diffuse_transmittance_sampling_rate");
+    p.spec_reflect_rate = sampling_rate(props, "specular_reflectance_sampling_rate");
+    p.spec_trans_rate = sampling_rate(props, "specular_transmittance_sampling_rate");
+    p.diffuse_reflect_rate = sampling_rate(props, "diffuse_reflectance_sampling_rate");
+    p.diffuse_trans_rate = sampling_rate(props, "diffuse_transmittance_sampling_rate");
     return make_principledthin(p);
 }
 
