@@ -20,10 +20,9 @@ namespace penumbra {
 
 namespace {
 
-class IrradianceMeter final : public SensorBase<IrradianceMeter> {
+class IrradianceMeter final : public SensorBase<IrradianceMeter, MeterSensor> {
   public:
     void attach_to(const Shape& shape) override { shape_ = &shape; }
-    bool projects_points() const override { return false; }
     void set_transform(const Transform& t) override { to_world = t; }
 
     std::pair<Ray, Color3f> sample_ray(const Vec2f& film_pos, const Vec2f& aperture_sample) const override {
@@ -38,19 +37,6 @@ class IrradianceMeter final : public SensorBase<IrradianceMeter> {
         return {at.spawn_ray(d), Color3f(Pi / (shape_->surface_area() * ps.pdf))};
     }
 
-    // Light tracing cannot connect to the meter's (cosine-weighted, area-averaged) importance through a film
-    // position: its sample_direction is zero (a ptracer image is black, as with a radiancemeter).
-    std::pair<DirectionSample3f, Color3f> sample_direction(const Interaction3f&,
-                                                           const Vec2f&) const override {
-        return {DirectionSample3f(), Color3f(0.f)};
-    }
-    bool project(const Vec3f&, Vec2f&) const override { return false; }
-
-    // No film position per point: the estimators that connect points to the camera are refused
-    // (diff/first_vertex.h).
-    template <typename T> bool film_position_t(const Vec3<T>&, const Vec3<T>&, Vec2<T>&, T&) const {
-        return false;
-    }
     template <typename T> Vec3<T> to_sensor_t(const Vec3<T>&) const { return Vec3<T>(0.f, 0.f, 1.f); }
 
     std::string to_string() const override { return "IrradianceMeter[film=" + film->to_string() + "]"; }

@@ -14,7 +14,7 @@ namespace penumbra {
 
 namespace {
 
-class RadianceMeter final : public SensorBase<RadianceMeter> {
+class RadianceMeter final : public SensorBase<RadianceMeter, MeterSensor> {
   public:
     void set_transform(const Transform& t) override {
         to_world = t;
@@ -22,23 +22,10 @@ class RadianceMeter final : public SensorBase<RadianceMeter> {
         direction_ = normalize(to_world.apply_vector(Vec3f(0.f, 0.f, 1.f)));
     }
 
-    bool projects_points() const override { return false; }
-
     std::pair<Ray, Color3f> sample_ray(const Vec2f&, const Vec2f&) const override {
         return {Ray(origin_, direction_), Color3f(1.f)};
     }
 
-    std::pair<DirectionSample3f, Color3f> sample_direction(const Interaction3f&,
-                                                           const Vec2f&) const override {
-        return {DirectionSample3f(), Color3f(0.f)};
-    }
-    bool project(const Vec3f&, Vec2f&) const override { return false; }
-
-    // No point has a film position (a set of measure zero sees the sensor): the estimators that connect
-    // points to the camera are refused (diff/first_vertex.h).
-    template <typename T> bool film_position_t(const Vec3<T>&, const Vec3<T>&, Vec2<T>&, T&) const {
-        return false;
-    }
     template <typename T> Vec3<T> to_sensor_t(const Vec3<T>&) const { return Vec3<T>(-direction_); }
 
     std::string to_string() const override { return "RadianceMeter[film=" + film->to_string() + "]"; }

@@ -23,6 +23,23 @@ std::shared_ptr<Sensor> make_irradiancemeter_sensor(const Properties& props, con
 // of the given aspect (W / H) (sensors/fov.cpp); also used by the projector emitter.
 float parse_x_fov(const Properties& props, double aspect);
 
+// A meter: a sensor onto which no scene point projects (it measures a set of rays of measure zero for light
+// tracing), so light tracing cannot connect to it (a ptracer image is black, as in Mitsuba) and the
+// estimators that connect points to the camera are refused (diff/first_vertex.h). Meters define sample_ray
+// and to_sensor_t.
+class MeterSensor : public Sensor {
+  public:
+    bool projects_points() const override { return false; }
+    std::pair<DirectionSample3f, Color3f> sample_direction(const Interaction3f&,
+                                                           const Vec2f&) const override {
+        return {DirectionSample3f(), Color3f(0.f)};
+    }
+    bool project(const Vec3f&, Vec2f&) const override { return false; }
+    template <typename T> bool film_position_t(const Vec3<T>&, const Vec3<T>&, Vec2<T>&, T&) const {
+        return false;
+    }
+};
+
 // A camera that maps film positions (pixels, (0, 0) = top-left of the image) to rays along to_world's +z. The
 // projection covers the film's full frame; the image is its crop window (film.h), so a film position s is the
 // frame position s + crop_offset.
