@@ -42,25 +42,39 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
         mean_ = Color3f(sum / double(image_.pixels.size()));
     }
 
+    // The four texels around texture position (u W - 1/2, v H - 1/2), (u, v) = to_uv(si.uv), and the
+    // bilinear weights toward the second of each pair (differentiable in uv).
+    template <typename T> struct Bilinear {
+        int xa, xb, ya, yb;
+        T wx, wy;
+    };
+    template <typename T> Vec2<T> texture_uv(const SurfaceInteraction<T>& si) const {
+        return {si.uv.x * to_uv_[0] + si.uv.y * to_uv_[1] + T(to_uv_[2]),
+                si.uv.x * to_uv_[3] + si.uv.y * to_uv_[4] + T(to_uv_[5])};
+    }
+    template <typename T> Bilinear<T> bilinear(const Vec2<T>& uv) const {
+        const int w = image_.width, h = image_.height;
+        const T px = uv.x * float(w) - T(0.5f), py = uv.y * float(h) - T(0.5f);
+        const int x0 = int(std::floor(detach(px))), y0 = int(std::floor(detach(py)));
+        return {wrap(x0, w),     wrap(x0 + 1, w),   wrap(y0, h),
+                wrap(y0 + 1, h), px - T(float(x0)), py - T(float(y0))};
+    }
+
     // Bilinear: f(u W - 1/2, v H - 1/2) interpolated between the four nearest texel centers; nearest: the
     // texel containing (u W, v H). Derivatives flow through the interpolation weights and, when `data` is
     // differentiated, through the texel values.
     template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>& si) const {
-        const T u = si.uv.x * to_uv_[0] + si.uv.y * to_uv_[1] + T(to_uv_[2]);
-        const T v = si.uv.x * to_uv_[3] + si.uv.y * to_uv_[4] + T(to_uv_[5]);
-        const int w = image_.width, h = image_.height;
+        const Vec2<T> uv = texture_uv(si);
         if (!bilinear_) {
-            const int x = wrap(int(std::floor(detach(u) * float(w))), w);
-            const int y = wrap(int(std::floor(detach(v) * float(h))), h);
+            const int w = image_.width, h = image_.height;
+            const int x = wrap(int(std::floor(detach(uv.x) * float(w))), w);
+            const int y = wrap(int(std::floor(detach(uv.y) * float(h))), h);
             return texel<T>(x, y);
         }
-        const T px = u * float(w) - T(0.5f), py = v * float(h) - T(0.5f);
-        const int x0 = int(std::floor(detach(px))), y0 = int(std::floor(detach(py)));
-        const T wx = px - T(float(x0)), wy = py - T(float(y0));
-        const int xa = wrap(x0, w), xb = wrap(x0 + 1, w), ya = wrap(y0, h), yb = wrap(y0 + 1, h);
-        const Color3<T> top = texel<T>(xa, ya) * (T(1.f) - wx) + texel<T>(xb, ya) * wx;
-        const Color3<T> bottom = texel<T>(xa, yb) * (T(1.f) - wx) + texel<T>(xb, yb) * wx;
-        return top * (T(1.f) - wy) + bottom * wy;
+        const Bilinear<T> b = bilinear(uv);
+        const Color3<T> top = texel<T>(b.xa, b.ya) * (T(1.f) - b.wx) + texel<T>(b.xb, b.ya) * b.wx;
+        const Color3<T> bottom = texel<T>(b.xa, b.yb) * (T(1.f) - b.wx) + texel<T>(b.xb, b.yb) * b.wx;
+        return top * (T(1.f) - b.wy) + bottom * b.wy;
     }
 
     // Single-channel value: the luminance of the texel color, as Mitsuba's bitmap eval_1 (a gray bitmap gives its
@@ -75,17 +89,11 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
     //               d/dv = H [(f01 - f00)(1 - wx) + (f11 - f10) wx], chained through the to_uv map.
     template <typename T> Vec2<T> eval_1_grad_t(const SurfaceInteraction<T>& si) const {
         if (!bilinear_) return Vec2<T>(T(0), T(0));
-        const T u = si.uv.x * to_uv_[0] + si.uv.y * to_uv_[1] + T(to_uv_[2]);
-        const T v = si.uv.x * to_uv_[3] + si.uv.y * to_uv_[4] + T(to_uv_[5]);
-        const int w = image_.width, h = image_.height;
-        const T px = u * float(w) - T(0.5f), py = v * float(h) - T(0.5f);
-        const int x0 = int(std::floor(detach(px))), y0 = int(std::floor(detach(py)));
-        const T wx = px - T(float(x0)), wy = py - T(float(y0));
-        const int xa = wrap(x0, w), xb = wrap(x0 + 1, w), ya = wrap(y0, h), yb = wrap(y0 + 1, h);
-        const T f00 = luminance(texel<T>(xa, ya)), f10 = luminance(texel<T>(xb, ya));
-        const T f01 = luminance(texel<T>(xa, yb)), f11 = luminance(texel<T>(xb, yb));
-        const T d_du = ((f10 - f00) * (T(1.f) - wy) + (f11 - f01) * wy) * float(w);
-        const T d_dv = ((f01 - f00) * (T(1.f) - wx) + (f11 - f10) * wx) * float(h);
+        const Bilinear<T> b = bilinear(texture_uv(si));
+        const T f00 = luminance(texel<T>(b.xa, b.ya)), f10 = luminance(texel<T>(b.xb, b.ya));
+        const T f01 = luminance(texel<T>(b.xa, b.yb)), f11 = luminance(texel<T>(b.xb, b.yb));
+        const T d_du = ((f10 - f00) * (T(1.f) - b.wy) + (f11 - f01) * b.wy) * float(image_.width);
+        const T d_dv = ((f01 - f00) * (T(1.f) - b.wx) + (f11 - f10) * b.wx) * float(image_.height);
         return {d_du * to_uv_[0] + d_dv * to_uv_[3], d_du * to_uv_[1] + d_dv * to_uv_[4]};
     }
 #define PENUMBRA_BITMAP_GRAD(T)                                                                              \
