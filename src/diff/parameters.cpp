@@ -1,6 +1,7 @@
 #include "diff/parameters.h"
 
 #include <algorithm>
+#include <initializer_list>
 #include <set>
 #include <sstream>
 
@@ -123,56 +124,49 @@ Parameters::Parameters(Scene& scene) {
 Parameters::~Parameters() { disable_all(); }
 
 void Parameters::add_motions(Scene& scene) {
-    for (size_t i = 0; i < scene.shapes.size(); ++i) {
-        Shape* shape = scene.shapes[i].get();
-        const std::string name = shape_name(*shape, i);
-        for (auto [suffix, kind] : {std::pair{"translate", Parameter::Kind::Translate},
-                                    std::pair{"rotate", Parameter::Kind::Rotate}, std::pair{"scale", Parameter::Kind::Scale}}) {
-            Parameter p;
-            p.name = name + "." + suffix;
+    using Kind = Parameter::Kind;
+    // `<owner>.translate`, `.rotate`, `.scale` (those of `kinds`), each moving what `moves` says.
+    const auto add = [&](const std::string& owner, std::initializer_list<Kind> kinds,
+                         const Parameter& moves) {
+        for (Kind kind : kinds) {
+            Parameter p = moves;
+            p.name = owner + (kind == Kind::Translate ? ".translate"
+                              : kind == Kind::Rotate  ? ".rotate"
+                                                      : ".scale");
             p.kind = kind;
-            p.geometry = true;
-            p.shape = shape;
             all_.push_back(p);
         }
+    };
+    for (size_t i = 0; i < scene.shapes.size(); ++i) {
+        Parameter moves;
+        moves.geometry = true;
+        moves.shape = scene.shapes[i].get();
+        add(shape_name(*moves.shape, i), {Kind::Translate, Kind::Rotate, Kind::Scale}, moves);
     }
     // An instance of a group with several shapes: its motions move all its copies.
     for (const auto& [id, copies] : scene.instance_shapes) {
         if (copies.size() < 2) continue;
-        for (auto [suffix, kind] :
-             {std::pair{"translate", Parameter::Kind::Translate},
-              std::pair{"rotate", Parameter::Kind::Rotate}, std::pair{"scale", Parameter::Kind::Scale}}) {
-            Parameter p;
-            p.name = id + "." + suffix;
-            p.kind = kind;
-            p.geometry = true;
-            p.shape = copies[0];
-            p.shapes = copies;
-            all_.push_back(p);
-        }
+        Parameter moves;
+        moves.geometry = true;
+        moves.shape = copies[0];
+        moves.shapes = copies;
+        add(id, {Kind::Translate, Kind::Rotate, Kind::Scale}, moves);
     }
-    const std::string camera = scene.sensor->id.empty() ? "sensor" : scene.sensor->id;
-    for (auto [suffix, kind] : {std::pair{"translate", Parameter::Kind::Translate}, std::pair{"rotate", Parameter::Kind::Rotate}}) {
-        Parameter p;
-        p.name = camera + "." + suffix;
-        p.kind = kind;
-        p.sensor = true;
-        all_.push_back(p);
-    }
+    Parameter camera;
+    camera.sensor = true;
+    add(scene.sensor->id.empty() ? "sensor" : scene.sensor->id, {Kind::Translate, Kind::Rotate}, camera);
     // Lights with a placement: point, spot and projector lights translate and rotate about their position;
     // directional lights and envmaps rotate.
     for (size_t i = 0; i < scene.emitters.size(); ++i) {
-        Emitter* e = scene.emitters[i].get();
-        if (!e->movable()) continue;
-        for (auto [suffix, kind] : {std::pair{"translate", Parameter::Kind::Translate},
-                                    std::pair{"rotate", Parameter::Kind::Rotate}}) {
-            if (kind == Parameter::Kind::Translate && e->is_infinite()) continue;
-            Parameter p;
-            p.name = (e->id.empty() ? "emitter_" + std::to_string(i) : e->id) + "." + suffix;
-            p.kind = kind;
-            p.emitter = e;
-            all_.push_back(p);
-        }
+        Parameter light;
+        light.emitter = scene.emitters[i].get();
+        if (!light.emitter->movable()) continue;
+        const std::string owner =
+            light.emitter->id.empty() ? "emitter_" + std::to_string(i) : light.emitter->id;
+        if (light.emitter->is_infinite())
+            add(owner, {Kind::Rotate}, light);
+        else
+            add(owner, {Kind::Translate, Kind::Rotate}, light);
     }
 }
 
