@@ -4,8 +4,7 @@
 #include "diff/budget.h"
 #include "diff/finite_difference.h"
 #include "diff/interior.h"
-#include "diff/path_sampling.h"
-#include "diff/psdr.h"
+#include "diff/method.h"
 #include "scene/scene.h"
 
 #include <nlohmann/json.hpp>
@@ -16,6 +15,8 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
 
 namespace penumbra::cli {
 
@@ -24,20 +25,12 @@ namespace {
 struct Common {
     std::string scene;
     std::string method = "psdr";
-    std::string first_vertex = "auto";
-    // Per-term samples per pixel for experts (-1: unset). Unset everywhere: --spp is the total budget, split by
-    // a calibration pass (diff/budget.h).
-    int boundary_spp = -1, primary_spp = -1, direct_spp = -1, indirect_spp = -1, pixel_spp = -1;
+    MethodOptions method_options; // the --<option> flags of the methods (diff/method.h) that were given
     std::vector<std::string> defines, params;
     int spp = 64, threads = 0, batches = 0;
     uint64_t seed = 0;
     std::string output, stderr_output, terms_prefix;
-    bool quiet = false, no_guiding = false;
-    // --method paths (paper 002)
-    std::string sampling = "differential";
-    float q = 0.5f;
-    bool no_nee = false, adaptive = false;
-    double defensive = 0.05, primal_fraction = 0.75;
+    bool quiet = false;
     std::string adjoint, target, loss = "l2";
 };
 
@@ -55,87 +48,43 @@ void add_common(CLI::App* cmd, Common& c, bool needs_params) {
     cmd->add_flag("-q,--quiet", c.quiet, "no progress bar");
 }
 
+// --method and every registered method's options (diff/method.h), each flag once; make_method() checks that the
+// given ones belong to the chosen method.
 void add_method(CLI::App* cmd, Common& c) {
-    cmd->add_option("--method", c.method,
-                    "interior (material-form interior term only), psdr (interior + boundary) or paths (path sampling "
-                    "methods of paper 002, non-geometric parameters only)")
-        ->check(CLI::IsMember({"interior", "psdr", "paths"}));
-    cmd->add_option("--boundary-spp", c.boundary_spp,
-                    "samples per pixel of each boundary term (experts; by default --spp is a total budget that a "
-                    "calibration pass splits over the terms)")
-        ->check(CLI::NonNegativeNumber);
-    cmd->add_option("--primary-spp", c.primary_spp, "samples per pixel of the primary boundary term (experts)")->check(CLI::NonNegativeNumber);
-    cmd->add_option("--direct-spp", c.direct_spp, "samples per pixel of the direct boundary term (experts)")->check(CLI::NonNegativeNumber);
-    cmd->add_option("--indirect-spp", c.indirect_spp, "samples per pixel of the indirect boundary term (experts)")->check(CLI::NonNegativeNumber);
-    cmd->add_option("--pixel-spp", c.pixel_spp, "samples per pixel of the pixel-boundary term (experts)")->check(CLI::NonNegativeNumber);
-    cmd->add_flag("--no-guiding", c.no_guiding, "sample the primary term's edges by projected length only (no contrast pilot)");
-    cmd->add_option("--first-vertex", c.first_vertex,
-                    "parameterization of the vertex the camera sees: image (fixed camera rays; needs a static camera), "
-                    "material (material points; the filter and pixel edges move) or auto (image unless the camera "
-                    "moves or a moving surface has a checkerboard/nearest texture)")
-        ->check(CLI::IsMember({"auto", "image", "material"}));
-    cmd->add_option("--sampling", c.sampling, "--method paths: differential (differential vertex sampling) or bsdf")
-        ->check(CLI::IsMember({"differential", "bsdf"}));
-    cmd->add_option("--q", c.q, "--method paths: probability that a vertex becomes the differential vertex (default 0.5)")
-        ->check(CLI::Range(0.0, 0.999));
-    cmd->add_flag("--no-nee", c.no_nee, "--method paths: no next-event estimation");
-    cmd->add_flag("--adaptive", c.adaptive, "--method paths: adaptive pixel sampling by |adjoint| (needs --adjoint or --target)");
-    cmd->add_option("--defensive", c.defensive, "--method paths: uniform share of the adaptive pixel density (default 0.05)")
-        ->check(CLI::Range(0.0, 1.0));
+    std::vector<std::string> names;
+    std::string help = "derivative method:";
+    std::map<std::string, std::string> owners;
+    for (const MethodInfo& m : derivative_methods()) {
+        names.push_back(m.name);
+        help += " " + m.name + " (" + m.help + ");";
+        for (const MethodOption& o : m.options) owners[o.name] += (owners[o.name].empty() ? "" : ", ") + m.name;
+    }
+    cmd->add_option("--method", c.method, help)->check(CLI::IsMember(names));
+    std::set<std::string> added;
+    for (const MethodInfo& m : derivative_methods())
+        for (const MethodOption& o : m.options) {
+            if (!added.insert(o.name).second) continue;
+            const std::string flag = "--" + o.name, text = o.help + " [method " + owners[o.name] + "]";
+            const std::string name = o.name;
+            if (o.type == MethodOption::Type::Bool)
+                cmd->add_flag_callback(flag, [&c, name] { c.method_options.set(name, "true"); }, text);
+            else
+                cmd->add_option_function<std::string>(flag, [&c, name](const std::string& v) { c.method_options.set(name, v); },
+                                                      text)
+                    ->type_name(o.type == MethodOption::Type::Int     ? "INT"
+                                : o.type == MethodOption::Type::Float ? "FLOAT"
+                                                                      : "TEXT");
+        }
 }
 
-// --method paths: the options of diff/path_sampling.h from the command line.
-PathSamplingOptions path_sampling_options(const Scene& scene, const Common& c, int batches) {
-    PathSamplingOptions o;
-    o.batches = batches;
-    o.spp = c.spp / batches;
-    o.seed = c.seed;
-    o.threads = c.threads;
-    o.path = path_settings(scene);
-    o.differential = c.sampling == "differential";
-    o.q = c.q;
-    o.nee = !c.no_nee;
-    o.adaptive = c.adaptive;
-    o.defensive = c.defensive;
-    o.primal_fraction = c.primal_fraction;
-    return o;
-}
-
-std::string path_sampling_name(const Common& c) {
-    return c.sampling + " sampling" + (c.no_nee ? "" : " + NEE") + (c.adaptive ? " + adaptive pixels" : "");
-}
-
-// The options shared by every psdr run from the command line; the per-term budgets are set by the callers.
-PsdrOptions psdr_base(const Scene& scene, const Common& c, int batches, bool antithetic) {
-    PsdrOptions o;
-    o.interior.batches = batches;
-    o.interior.spp = c.spp / batches;
-    o.interior.seed = c.seed;
-    o.interior.threads = c.threads;
-    o.interior.antithetic = antithetic;
-    o.interior.path = path_settings(scene);
-    o.interior.first_vertex = parse_first_vertex(c.first_vertex);
-    o.primary_spp = o.direct_spp = o.indirect_spp = o.pixel_spp = 0;
-    o.guiding = !c.no_guiding;
-    return o;
-}
-
-bool manual_budget(const Common& c) {
-    return c.boundary_spp >= 0 || c.primary_spp >= 0 || c.direct_spp >= 0 || c.indirect_spp >= 0 || c.pixel_spp >= 0;
-}
-
-// Expert budgets: the interior gets --spp, each boundary term its own flag, else --boundary-spp, else --spp
-// (split over the batches).
-void set_manual_budget(PsdrOptions& o, const Common& c, int batches) {
-    const int fallback = c.boundary_spp >= 0 ? c.boundary_spp : c.spp;
-    auto per_batch = [&](int term) {
-        const int spp = term >= 0 ? term : fallback;
-        return spp > 0 ? std::max(1, spp / batches) : 0;
-    };
-    o.primary_spp = per_batch(c.primary_spp);
-    o.direct_spp = per_batch(c.direct_spp);
-    o.indirect_spp = per_batch(c.indirect_spp);
-    o.pixel_spp = per_batch(c.pixel_spp);
+MethodRun method_run(const Common& c, int batches) {
+    MethodRun run;
+    run.spp = c.spp;
+    run.batches = batches;
+    run.seed = c.seed;
+    run.threads = c.threads;
+    run.verbose = !c.quiet;
+    return run;
 }
 
 std::vector<std::pair<std::string, std::vector<float>>> selection(const std::vector<std::string>& params) {
@@ -177,69 +126,31 @@ void cmd_params(const Common& c) {
     }
 }
 
-// `derivative --method paths`: forward mode of the path sampling estimator.
-void cmd_derivative_paths(const Common& c, Scene& scene, Parameters& params) {
-    if (c.adaptive && c.adjoint.empty()) throw Error("--adaptive needs --adjoint (the pixel importance |∂L/∂I|)");
-    const Image adjoint = c.adjoint.empty() ? Image() : read_image(c.adjoint, false);
-    PathSamplingOptions o = path_sampling_options(scene, c, batches_for(c));
-    ProgressBar bar(!c.quiet, "derivative");
-    o.progress = bar.callback();
-    const DerivativeImage d = path_sampling_derivative(scene, params, o, adjoint);
-    write_signed(c.output, d.derivative);
-    if (!c.stderr_output.empty()) write_image(c.stderr_output, d.stderr_img);
-    const Film& film = *scene.sensor->film;
-    std::fprintf(stderr, "derivative (path sampling: %s) %dx%d at %d spp in %.2f s, mean %.6g -> %s\n",
-                 path_sampling_name(c).c_str(), film.width, film.height, o.spp * o.batches, d.seconds,
-                 image_mean(d.derivative), c.output.c_str());
-}
-
-void cmd_derivative(const Common& c, bool no_antithetic) {
+void cmd_derivative(const Common& c) {
     check_output(c.output);
+    auto method = make_method(c.method, c.method_options);
     auto scene = load_scene(c.scene, parse_defines(c.defines));
     Parameters params(*scene);
     params.enable(selection(c.params));
-    if (c.method == "paths") return cmd_derivative_paths(c, *scene, params);
-    const int batches = batches_for(c);
-    const bool total = c.method == "psdr";
-    PsdrOptions o = psdr_base(*scene, c, batches, !no_antithetic);
-    const auto start = std::chrono::steady_clock::now();
-    if (total && manual_budget(c)) set_manual_budget(o, c, batches);
-    else if (total) {
-        if (!c.quiet) std::fprintf(stderr, "calibrating the terms' budgets...\n");
-        o = psdr_budget(*scene, params, o, c.spp);
-    }
-    if (total && !c.quiet) std::fprintf(stderr, "budget: %s%s\n", describe_budget(o).c_str(), manual_budget(c) ? "" : " (calibrated)");
+    const Image importance = c.adjoint.empty() ? Image() : read_image(c.adjoint, false);
+    MethodRun run = method_run(c, batches_for(c));
+    if (!c.adjoint.empty()) run.importance = &importance;
     ProgressBar bar(!c.quiet, "derivative");
-    o.interior.progress = bar.callback();
-    const PsdrDerivative d = psdr_derivative(*scene, params, o);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    write_signed(c.output, total ? d.total : d.interior.derivative);
-    if (!c.stderr_output.empty()) write_image(c.stderr_output, total ? d.total_stderr : d.interior.stderr_img);
-    if (!c.terms_prefix.empty()) {
-        // Each term's image (and, with --stderr, its standard error as PREFIX_<term>_stderr.exr).
-        const auto terms = d.terms();
-        for (size_t k = 0; k < terms.size(); ++k) {
-            if (k > 0 && !total) break;
-            if (k == 4 && !needs_pixel_boundary(*scene, params, o.interior.first_vertex)) continue;
-            const std::string name = c.terms_prefix + "_" + PsdrTermNames[k];
-            write_signed(name + lower_extension(c.output), *terms[k].first);
-            if (!c.stderr_output.empty() && !terms[k].second->pixels.empty()) write_image(name + "_stderr.exr", *terms[k].second);
+    run.progress = bar.callback();
+    const MethodDerivative d = method->derivative(*scene, params, run);
+    write_signed(c.output, d.derivative);
+    if (!c.stderr_output.empty()) write_image(c.stderr_output, d.stderr_img);
+    // Each term's image (and, with --stderr, its standard error as PREFIX_<term>_stderr.exr).
+    if (!c.terms_prefix.empty())
+        for (const MethodTerm& t : d.terms) {
+            const std::string name = c.terms_prefix + "_" + t.name;
+            write_signed(name + lower_extension(c.output), t.value);
+            if (!c.stderr_output.empty() && !t.stderr_img.pixels.empty()) write_image(name + "_stderr.exr", t.stderr_img);
         }
-    }
-    if (total && !c.quiet) {
-        std::fprintf(stderr, "%-9s %12s %10s %12s %9s\n", "term", "samples", "rays/smp", "tape/smp", "seconds");
-        for (size_t k = 0; k < d.cost.size(); ++k) {
-            const SampleCost& t = d.cost[k];
-            if (t.samples == 0) continue;
-            std::fprintf(stderr, "%-9s %12llu %10.2f %12.1f %9.2f\n", PsdrTermNames[k], (unsigned long long)t.samples,
-                         double(t.rays) / double(t.samples), double(t.tape_nodes) / double(t.samples), d.seconds[k]);
-        }
-    }
     const Film& film = *scene->sensor->film;
-    std::fprintf(stderr, "derivative (%s, %s first vertex) %dx%d, %d spp in %.2f s, mean %.6g -> %s\n",
-                 total ? "interior + boundary terms" : "interior term",
-                 image_space_first_vertex(*scene, params, o.interior.first_vertex) ? "image-space" : "material-form",
-                 film.width, film.height, c.spp, seconds, image_mean(total ? d.total : d.interior.derivative), c.output.c_str());
+    std::fprintf(stderr, "derivative (%s: %s) %dx%d, %d spp in %.2f s, mean %.6g -> %s\n", c.method.c_str(),
+                 d.description.c_str(), film.width, film.height, c.spp, d.seconds, image_mean(d.derivative),
+                 c.output.c_str());
 }
 
 void cmd_fd(const Common& c, double eps) {
@@ -261,49 +172,26 @@ void cmd_fd(const Common& c, double eps) {
                  o.spp * batches, fd.seconds, image_mean(fd.derivative), c.output.c_str());
 }
 
-// `gradient --method paths`: PRB passes 2-3 given an adjoint image, or all three passes given a target image.
-Gradient gradient_paths(const Common& c, const Scene& scene, const Parameters& params, nlohmann::json& out) {
-    PathSamplingOptions o = path_sampling_options(scene, c, 1);
-    ProgressBar bar(!c.quiet, "gradient");
-    o.progress = bar.callback();
-    out["method"] = "paths: " + path_sampling_name(c);
-    if (!c.target.empty()) {
-        const LossGradient l = path_sampling_loss_gradient(scene, params, read_image(c.target, false), parse_loss_kind(c.loss), o);
-        out["loss"] = l.loss;
-        out["seconds_primal"] = l.seconds_primal;
-        std::fprintf(stderr, "loss (%s) of the pass-1 image: %.6g\n", c.loss.c_str(), l.loss);
-        return {l.values, l.primal, l.seconds, {}};
-    }
-    const SampledGradient g = path_sampling_gradient(scene, params, read_image(c.adjoint, false), o);
-    return {g.values, g.primal, g.seconds, {}};
-}
-
 void cmd_gradient(const Common& c) {
     if (c.adjoint.empty() == c.target.empty()) throw Error("gradient: give exactly one of --adjoint and --target");
-    if (!c.target.empty() && c.method != "paths") throw Error("gradient: --target needs --method paths");
-    if (c.adaptive && c.method != "paths") throw Error("gradient: --adaptive needs --method paths");
+    auto method = make_method(c.method, c.method_options);
     auto scene = load_scene(c.scene, parse_defines(c.defines));
     Parameters params(*scene);
     if (c.params.empty()) params.enable_all_data();
     else params.enable(selection(c.params));
     nlohmann::json out;
-    Gradient g;
-    if (c.method == "paths") {
-        g = gradient_paths(c, *scene, params, out);
+    MethodRun run = method_run(c, 1);
+    ProgressBar bar(!c.quiet, "gradient");
+    run.progress = bar.callback();
+    MethodGradient g;
+    if (!c.target.empty()) {
+        g = method->loss_gradient(*scene, params, read_image(c.target, false), parse_loss_kind(c.loss), run);
+        out["loss"] = g.loss;
+        std::fprintf(stderr, "loss (%s) of the primal image: %.6g\n", c.loss.c_str(), g.loss);
     } else {
-        const Image adjoint = read_image(c.adjoint, false);
-        PsdrOptions o = psdr_base(*scene, c, 1, true);
-        if (c.method == "psdr" && manual_budget(c)) {
-            set_manual_budget(o, c, 1);
-        } else if (c.method == "psdr") {
-            if (!c.quiet) std::fprintf(stderr, "calibrating the terms' budgets...\n");
-            o = psdr_gradient_budget(*scene, params, adjoint, o, c.spp);
-        }
-        if (c.method == "psdr") out["budget"] = describe_budget(o);
-        ProgressBar bar(!c.quiet, "gradient");
-        o.interior.progress = bar.callback();
-        g = psdr_gradient(*scene, params, adjoint, o);
+        g = method->gradient(*scene, params, read_image(c.adjoint, false), run);
     }
+    out["method"] = c.method + ": " + g.description;
     out["seconds"] = g.seconds;
     out["spp"] = c.spp;
     for (const auto& [p, index] : params.enabled()) {
@@ -363,19 +251,17 @@ void add_diff_commands(CLI::App& app) {
     p->callback([params] { cmd_params(*params); });
 
     auto deriv = std::make_shared<Common>();
-    auto no_antithetic = std::make_shared<bool>(false);
-    auto* d = app.add_subcommand("derivative", "forward mode: the image derivative dI/dθ (interior term)");
+    auto* d = app.add_subcommand("derivative", "forward mode: the image derivative dI/dθ");
     add_common(d, *deriv, true);
     d->add_option("-o,--output", deriv->output, "derivative image (.exr values, .png colormap)")->required();
     d->add_option("--stderr", deriv->stderr_output, "per-pixel standard-error image (.exr)");
     d->add_option("--batches", deriv->batches, "independent batches for --stderr (default 8)")->check(CLI::PositiveNumber);
-    d->add_flag("--no-antithetic", *no_antithetic, "disable pixel-level antithetic sampling");
     d->add_option("--terms", deriv->terms_prefix,
                   "also write each term's image as PREFIX_interior / _primary / _direct / _indirect (/ _pixel with a box "
                   "filter and a moving camera), and with --stderr their standard errors as PREFIX_<term>_stderr.exr");
-    d->add_option("--adjoint", deriv->adjoint, "--method paths --adaptive: adjoint image ∂L/∂I giving the pixel importance");
+    d->add_option("--adjoint", deriv->adjoint, "adjoint image ∂L/∂I giving the pixel importance (--method paths --adaptive)");
     add_method(d, *deriv);
-    d->callback([deriv, no_antithetic] { cmd_derivative(*deriv, *no_antithetic); });
+    d->callback([deriv] { cmd_derivative(*deriv); });
 
     auto fd = std::make_shared<Common>();
     auto eps = std::make_shared<double>(1e-2);
@@ -389,15 +275,12 @@ void add_diff_commands(CLI::App& app) {
 
     auto grad = std::make_shared<Common>();
     auto* g = app.add_subcommand("gradient", "reverse mode: dL/dθ for all parameters given an adjoint image ∂L/∂I "
-                                             "(or, with --method paths, a target image and a loss)");
+                                             "(or a target image and a loss)");
     add_common(g, *grad, false);
     g->add_option("--adjoint", grad->adjoint, "adjoint image ∂L/∂I (.exr, the film's size)");
     g->add_option("--target", grad->target,
-                  "--method paths: target image; a primal pass (its own samples) gives the loss and its adjoint");
+                  "target image: a primal pass (its own samples) gives the loss and its adjoint");
     g->add_option("--loss", grad->loss, "loss for --target: l2 or rel_l2")->check(CLI::IsMember({"l2", "rel_l2"}));
-    g->add_option("--primal-fraction", grad->primal_fraction,
-                  "share of --spp spent on the primal pass with --target (default 0.75, the paper's 3:1)")
-        ->check(CLI::Range(0.01, 0.99));
     g->add_option("-o,--output", grad->output, "gradient as JSON");
     add_method(g, *grad);
     g->callback([grad] { cmd_gradient(*grad); });

@@ -25,10 +25,10 @@ void print_summary(const OptimizeConfig& config, const OptimizeResult& result) {
     const double loss = result.history.empty() ? NAN : result.history.back().loss;
     std::fprintf(stderr,
                  "%s: %d iterations in %.1f s (%.2f s/iteration; target %.1f s); last loss %.4g -> %s\n",
-                 result.psdr ? "psdr" : "interior", config.iterations, result.seconds,
+                 result.method.c_str(), config.iterations, result.seconds,
                  config.iterations ? result.seconds / config.iterations : 0.0, result.target_seconds, loss,
                  config.output.c_str());
-    if (!result.budget.empty()) std::fprintf(stderr, "  gradient budget: %s (calibrated)\n", result.budget.c_str());
+    if (!result.description.empty()) std::fprintf(stderr, "  gradient: %s\n", result.description.c_str());
     for (const ParameterResult& p : result.parameters) {
         std::fprintf(stderr, "  %-28s %s -> %s", p.name.c_str(), format_values(p.initial).c_str(),
                      format_values(p.final).c_str());

@@ -114,15 +114,18 @@ TEST(PoseGradient, MatchesFiniteDifferencesOfTheLoss) {
     };
     const int batches = 16;
     std::vector<Stats> grad(n), interior(n), fd(n);
+    MethodOptions budget;
+    for (const char* term : {"primary-spp", "direct-spp"}) budget.set(term, "32");
+    budget.set("indirect-spp", "4");
+    budget.set("pixel-spp", "4");
+    const auto psdr = make_method("psdr", budget);
+    const auto interior_method = make_method("interior", MethodOptions());
     for (int b = 0; b < batches; ++b) {
-        PsdrOptions o;
-        o.interior.spp = 32;
-        o.interior.seed = 100 + uint64_t(b);
-        o.interior.path = path_settings(*scene);
-        o.primary_spp = 32;
-        o.direct_spp = 32;
-        const std::vector<double> g = problem.gradient(adjoint, o, true);
-        const std::vector<double> gi = problem.gradient(adjoint, o, false);
+        MethodRun run;
+        run.spp = 32;
+        run.seed = 100 + uint64_t(b);
+        const std::vector<double> g = problem.gradient(adjoint, *psdr, run);
+        const std::vector<double> gi = problem.gradient(adjoint, *interior_method, run);
         RenderOptions fo;
         fo.spp = 128;
         fo.seed = 500 + uint64_t(b);
@@ -237,7 +240,7 @@ TEST(PoseDemo, RecoversTranslationAndRotation) {
                 result.final_rotation_error, result.seconds);
     EXPECT_LT(result.final_translation_error, first.translation_error / 20);
     EXPECT_LT(result.final_rotation_error, first.rotation_error / 20);
-    EXPECT_TRUE(result.psdr);
+    EXPECT_EQ(result.method, "psdr");
     for (const char* file : {"log.csv", "loss.png", "parameter_error.png", "result.json", "final.png"})
         EXPECT_TRUE(fs::exists(fs::path(config.output) / file)) << file;
     fs::remove_all(config.output);

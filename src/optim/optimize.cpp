@@ -164,24 +164,31 @@ OptimizeConfig parse_optimize_config(const json& j, const std::string& base_dir,
     }
     target.finish();
 
-    const std::string method = root.string("method", "auto");
-    if (method == "auto")
-        c.method = OptimizeConfig::Method::Auto;
-    else if (method == "interior")
-        c.method = OptimizeConfig::Method::Interior;
-    else if (method == "psdr")
-        c.method = OptimizeConfig::Method::Psdr;
-    else
-        throw Error(source + ": key 'method': unknown method '" + method +
-                    "' (expected auto, interior or psdr)");
+    c.method = root.string("method", "auto");
+    if (c.method != "auto") {
+        try {
+            find_method(c.method);
+        } catch (const Error& e) {
+            throw Error(source + ": key 'method': " + e.what());
+        }
+    }
     for (const char* key : {"primary_spp", "direct_spp", "indirect_spp"})
-        if (root.has(key) && c.method == OptimizeConfig::Method::Interior)
-            throw Error(source + ": key '" + key +
-                        "' is a boundary-term budget; method 'interior' has no boundary terms");
-    if (root.has("primary_spp") || root.has("direct_spp") || root.has("indirect_spp")) {
-        c.primary_spp = int(root.integer("primary_spp", 4, 0));
-        c.direct_spp = int(root.integer("direct_spp", 4, 0));
-        c.indirect_spp = int(root.integer("indirect_spp", 4, 0));
+        if (root.has(key) && c.method != "auto" && c.method != "psdr")
+            throw Error(source + ": key '" + key + "' is a boundary-term budget; method '" + c.method +
+                        "' has no boundary terms");
+    if (root.has("primary_spp") || root.has("direct_spp") || root.has("indirect_spp"))
+        for (const std::string term : {"primary", "direct", "indirect"})
+            c.method_options.set(term + "-spp", std::to_string(root.integer(term + "_spp", 4, 0)));
+    if (const nlohmann::json* options = root.find("options", false)) {
+        if (!options->is_object()) throw Error(source + ": key 'options' must be an object (option name → value)");
+        for (const auto& [key, value] : options->items()) {
+            std::string name = key;
+            std::replace(name.begin(), name.end(), '_', '-');
+            if (value.is_string()) c.method_options.set(name, value.get<std::string>());
+            else if (value.is_boolean()) c.method_options.set(name, value.get<bool>() ? "true" : "false");
+            else if (value.is_number()) c.method_options.set(name, value.dump());
+            else throw Error(source + ": key 'options." + key + "' must be a string, number or boolean");
+        }
     }
     c.loss = parse_loss_kind(root.string("loss", "l2"));
     c.iterations = int(root.integer("iterations", c.iterations, 0));
@@ -292,8 +299,8 @@ json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(); }
 
 void write_result_json(const fs::path& path, const OptimizeResult& result) {
     json j;
-    j["method"] = result.psdr ? "psdr" : "interior";
-    if (!result.budget.empty()) j["budget"] = result.budget;
+    j["method"] = result.method;
+    j["method_description"] = result.description;
     j["final_parameter_error"] = finite_or_null(result.final_parameter_error);
     j["final_translation_error"] = finite_or_null(result.final_translation_error);
     j["final_rotation_error_degrees"] = finite_or_null(result.final_rotation_error);
@@ -343,12 +350,14 @@ OptimizeResult optimize(const OptimizeConfig& config,
     auto scene = load_scene(config.scene, config.defines);
     InverseProblem problem(*scene, config.parameters);
     OptimizeResult result;
-    if (config.method == OptimizeConfig::Method::Interior && problem.geometric())
+    if (config.method == "interior" && problem.geometric())
         throw Error(
             "method 'interior' cannot optimize a pose: the interior term alone has no silhouette or "
             "shadow-edge (boundary) terms, so its pose gradient is biased; use method 'psdr' (or 'auto')");
-    result.psdr = config.method == OptimizeConfig::Method::Psdr ||
-                  (config.method == OptimizeConfig::Method::Auto && problem.geometric());
+    result.method = config.method != "auto" ? config.method : problem.geometric() ? "psdr" : "interior";
+    // Method auto without a pose: the interior term alone (psdr's budget keys, if given, do not apply).
+    const std::unique_ptr<DerivativeMethod> method = make_method(
+        result.method, config.method == "auto" && result.method == "interior" ? MethodOptions() : config.method_options);
 
     // Truth and initial values, in the problem's layout (poses: 0 = the scene's pose).
     std::vector<double> truth = problem.scene_values(), x = truth;
@@ -387,16 +396,9 @@ OptimizeResult optimize(const OptimizeConfig& config,
         std::chrono::duration<double>(std::chrono::steady_clock::now() - target_start).count();
     problem.set_values(x);
 
-    PsdrOptions diff;
-    diff.interior.spp = config.gradient_spp;
-    diff.interior.threads = config.threads;
-    diff.interior.path = path_settings(*scene);
-    const bool calibrate = result.psdr && config.primary_spp < 0;
-    if (!calibrate) {
-        diff.primary_spp = std::max(0, config.primary_spp);
-        diff.direct_spp = std::max(0, config.direct_spp);
-        diff.indirect_spp = std::max(0, config.indirect_spp);
-    }
+    MethodRun run;
+    run.spp = config.gradient_spp;
+    run.threads = config.threads;
     CsvLog log(out / "log.csv", problem);
     const auto start = std::chrono::steady_clock::now();
     auto elapsed = [&] {
@@ -423,12 +425,9 @@ OptimizeResult optimize(const OptimizeConfig& config,
         if (config.snapshot_every > 0 && it % config.snapshot_every == 0)
             write_image((out / snapshot_name(it)).string(), primal);
 
-        diff.interior.seed = stream_seed(config.seed, 2 * uint64_t(it) + 2);
-        if (calibrate && it == 0) {
-            diff = problem.gradient_budget(loss.adjoint, diff, config.gradient_spp);
-            result.budget = describe_budget(diff);
-        }
-        const std::vector<double> gradient = problem.gradient(loss.adjoint, diff, result.psdr);
+        run.seed = stream_seed(config.seed, 2 * uint64_t(it) + 2);
+        const std::vector<double> gradient =
+            problem.gradient(loss.adjoint, *method, run, it == 0 ? &result.description : nullptr);
         // Exponential schedule: the rates fall to lr_decay × lr at the last iteration.
         const double lr_scale =
             config.iterations > 1 ? std::pow(config.lr_decay, double(it) / (config.iterations - 1)) : 1.0;

@@ -14,9 +14,11 @@
 //                              {"values": {name → number | [values]}, "spp": int}: the same scene with these
 //                              values of optimized parameters (the others keep the scene's), rendered at
 //                              start
-//   method          string     "auto" (default: psdr when a pose is optimized, else interior) | "interior" |
-//                              "psdr"; "interior" with a pose is an error (it has no silhouette or shadow
-//                              term)
+//   method          string     "auto" (default: psdr when a pose is optimized, else interior) or any
+//                              derivative method (diff/method.h: psdr, interior, paths, ...); "interior" with
+//                              a pose is an error (it has no silhouette or shadow term)
+//   options         object     the method's options, name → value as on the command line without dashes
+//                              ({"first-vertex": "material", "q": 0.3}; '_' may replace '-')
 //   primary_spp     int        psdr: primary boundary samples per pixel (0 disables the term)
 //   direct_spp      int        psdr: direct boundary samples per pixel (0 disables the term)
 //   indirect_spp    int        psdr: indirect boundary samples per pixel and technique (0 disables it)
@@ -34,6 +36,7 @@
 //                              (default 1: constant rates)
 //   threads         int        worker threads (0 = all; default 0)
 #pragma once
+#include "diff/method.h"
 #include "optim/loss.h"
 #include "optim/problem.h"
 
@@ -55,8 +58,8 @@ struct OptimizeConfig {
     std::string target_image; // resolved path, or empty for a rendered target
     std::map<std::string, std::vector<float>> target_values;
     int target_spp = 1024;
-    enum class Method { Auto, Interior, Psdr } method = Method::Auto;
-    int primary_spp = -1, direct_spp = -1, indirect_spp = -1; // -1: calibrated from gradient_spp (see above)
+    std::string method = "auto";  // "auto" or a registered derivative method (diff/method.h)
+    MethodOptions method_options; // its options (including the psdr budget keys above)
     LossKind loss = LossKind::L2;
     int iterations = 100;
     int spp = 16, gradient_spp = 16;
@@ -98,8 +101,8 @@ struct OptimizeResult {
     double final_parameter_error = std::numeric_limits<double>::quiet_NaN();
     double final_translation_error = std::numeric_limits<double>::quiet_NaN();
     double final_rotation_error = std::numeric_limits<double>::quiet_NaN();
-    bool psdr = false;  // the method used
-    std::string budget; // psdr's per-term budget when calibrated (diff/budget.h)
+    std::string method;      // the method used
+    std::string description; // the method's description of its first gradient (psdr: the calibrated budget)
     double target_seconds = 0, seconds = 0;
 };
 

@@ -1,7 +1,6 @@
 #include "optim/problem.h"
 
 #include "core/error.h"
-#include "diff/budget.h"
 
 #include <cmath>
 #include <map>
@@ -170,14 +169,10 @@ void InverseProblem::apply() {
         selection_); // after the meshes moved: the motions' centers are the current bounding boxes'
 }
 
-PsdrOptions InverseProblem::gradient_budget(const Image& adjoint, const PsdrOptions& base, int spp) const {
-    return psdr_gradient_budget(scene_, *params_, adjoint, base, spp);
-}
-
-std::vector<double> InverseProblem::gradient(const Image& adjoint, const PsdrOptions& options,
-                                             bool psdr) const {
-    const Gradient g = psdr ? psdr_gradient(scene_, *params_, adjoint, options)
-                            : render_gradient(scene_, *params_, adjoint, options.interior);
+std::vector<double> InverseProblem::gradient(const Image& adjoint, DerivativeMethod& method,
+                                             const MethodRun& run, std::string* description) const {
+    const MethodGradient g = method.gradient(scene_, *params_, adjoint, run);
+    if (description) *description = g.description;
     std::vector<double> out(static_cast<size_t>(dimension_));
     for (const Entry& e : entries_) {
         if (e.kind == Kind::Data) {

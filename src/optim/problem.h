@@ -5,10 +5,10 @@
 //                        about the shape's bounding-box center in the scene (optim/pose.h).
 // Tangent vectors (gradients, Adam steps, finite-difference directions) have the same layout; for rotations
 // they are world-frame increments ω (degrees) applied on the left, R ← exp([ω]×) R.
-// Gradients come from the interior term alone or from the psdr total (interior + boundary terms,
-// diff/psdr.h); a pose needs the latter, since silhouettes and shadows carry most of its signal.
+// Gradients come from a derivative method (diff/method.h); a pose needs one with boundary terms (psdr), since
+// silhouettes and shadows carry most of its signal.
 #pragma once
-#include "diff/psdr.h"
+#include "diff/method.h"
 #include "optim/adam.h"
 #include "optim/pose.h"
 
@@ -65,11 +65,11 @@ class InverseProblem {
     // One Adam step with a gradient in the tangent layout (rotations: increments from 0, then retracted).
     void adam_step(Adam& adam, const std::vector<double>& gradient, double learning_rate_scale);
 
-    // dL/dx in the tangent layout for the adjoint ∂L/∂I at the current values. With `psdr` the boundary terms
-    // are included (options.primary_spp / direct_spp); otherwise only options.interior is used.
-    std::vector<double> gradient(const Image& adjoint, const PsdrOptions& options, bool psdr) const;
-    // The psdr total's per-term budgets for `spp` samples per pixel and this adjoint (diff/budget.h).
-    PsdrOptions gradient_budget(const Image& adjoint, const PsdrOptions& base, int spp) const;
+    // dL/dx in the tangent layout for the adjoint ∂L/∂I at the current values, by a derivative method
+    // (diff/method.h: psdr includes the boundary terms a pose needs, interior does not).
+    // `description`, when given, receives the method's description of the run.
+    std::vector<double> gradient(const Image& adjoint, DerivativeMethod& method, const MethodRun& run,
+                                 std::string* description = nullptr) const;
 
     // Errors against true values (the values() layout): ‖x − x*‖ / ‖x*‖ over Data entries; ‖t − t*‖ (scene
     // units) and the angle of R R*ᵀ (degrees) of one pose entry. NaN when there is no such entry.
