@@ -2,6 +2,7 @@
 #include "core/rng.h"
 #include "core/warp.h"
 #include "scene/factory.h"
+#include "scene/scene.h"
 #include "scene/sensor.h"
 
 #include <gtest/gtest.h>
@@ -217,4 +218,20 @@ TEST(CamSensor, OrthographicExtentAndImportance) {
     EXPECT_NEAR(weight.x * 8.f, 1.f, 1e-6f); // 1 / film area (4 x 2)
     EXPECT_NEAR(norm(ds.d - Vec3f(0, 0, -1)), 0.f, 1e-6f);
     EXPECT_NEAR(ds.dist, 4.f - 0.01f, 1e-5f);
+}
+
+// Several sensors load in declaration order (a sensor nested in a shape counts where the shape is); the first
+// is rendered unless another is selected (Mitsuba's scene.sensors()).
+TEST(CamSensor, SeveralSensorsLoadInOrder) {
+    auto scene = load_scene_string(R"(<scene version="3.0.0">
+      <sensor type="perspective" id="front"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/></film></sensor>
+      <sensor type="orthographic" id="top"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
+      <shape type="sphere"><sensor type="irradiancemeter" id="probe"/></shape>
+    </scene>)");
+    ASSERT_EQ(scene->sensors.size(), 3u);
+    EXPECT_EQ(scene->sensors[0]->id, "front");
+    EXPECT_EQ(scene->sensors[1]->id, "top");
+    EXPECT_EQ(scene->sensors[2]->id, "probe");
+    EXPECT_EQ(scene->sensor, scene->sensors[0]);
+    EXPECT_EQ(scene->sensors[1]->film->width, 4);
 }

@@ -6,6 +6,7 @@
 // the pixel filter in forward mode, and propagate the filter-weighted adjoint back to the parameters in reverse
 // mode.
 #pragma once
+#include "core/interrupt.h"
 #include "diff/first_vertex.h"
 #include "diff/parameters.h"
 #include "diff/sample_cost.h"
@@ -85,6 +86,7 @@ template <typename Body> void for_each_sample(uint64_t n, const BoundaryOptions&
         tbb::parallel_for(0, chunks, [&](int c) {
             Sampler sampler;
             for (uint64_t i = n * c / chunks; i < n * (c + 1) / chunks; ++i) {
+                if ((i & 1023) == 0) check_interrupt();
                 sampler.start(options.seed ^ salt, i, 0);
                 body(c, i, sampler);
             }

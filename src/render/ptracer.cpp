@@ -8,6 +8,7 @@
 // | hide_emitters  | boolean | false   | do not show directly visible emitters                      |
 #include "render/ptracer.h"
 
+#include "core/interrupt.h"
 #include "render/adjoint_shading.h"
 #include "render/film_footprint.h"
 
@@ -122,6 +123,7 @@ std::vector<Layer> ParticleTracer::render(const Scene& scene, const RenderOption
             RayCounter counter;
             const uint64_t begin = n_paths * c / n_chunks, end = n_paths * (c + 1) / n_chunks;
             for (uint64_t i = begin; i < end; ++i) {
+                if ((i & 1023) == 0) check_interrupt();
                 sampler.start(options.seed ^ 0x9e3779b97f4a7c15ULL, i, 0);
                 trace(scene, sampler, chunks[c], counter);
                 if ((i - begin + 1) % batch == 0 || i + 1 == end) {

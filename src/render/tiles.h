@@ -1,6 +1,8 @@
 // Parallel loop over the film in 16x16 tiles. Each pixel is visited by exactly one task, so per-pixel results
 // do not depend on scheduling or the thread count.
 #pragma once
+#include "core/interrupt.h"
+
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -24,6 +26,7 @@ void for_each_tile(int width, int height, int threads, const Body& body,
         tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const tbb::blocked_range2d<int>& r) {
             for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
                 for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) {
+                    check_interrupt();
                     body(tx * tile, ty * tile, std::min(width, (tx + 1) * tile), std::min(height, (ty + 1) * tile));
                     const int finished = ++done;
                     if (progress) {

@@ -1,7 +1,7 @@
 // XmlScene -> Scene: instantiates declarations bottom-up through the per-kind factories, like Mitsuba 3's
 // instantiate_node(): children first, each object once (a <ref> yields the same instance), then the parent's
 // factory, then a check that every declared parameter was understood. The scene keeps top-level shapes (and
-// their area emitters), emitters, the single sensor (default: perspective) and the integrator (default:
+// their area emitters), emitters, the sensors (default: one perspective) and the integrator (default:
 // path).
 #include "render/integrator.h"
 #include "scene/factory.h"
@@ -102,13 +102,7 @@ void add_shape(Scene& scene, const std::shared_ptr<Object>& obj) {
         shape->emitter->set_shape(shape.get());
         scene.emitters.push_back(shape->emitter);
     }
-    if (shape->sensor) {
-        if (scene.sensor)
-            throw LoadError(shape->sensor->location,
-                            "a second sensor (penumbra renders one sensor; the first is at " +
-                                scene.sensor->location.str() + ")");
-        scene.sensor = shape->sensor;
-    }
+    if (shape->sensor) scene.sensors.push_back(shape->sensor);
 }
 
 std::unique_ptr<Scene> build_scene(const XmlScene& xml, const std::string& source_path) {
@@ -131,11 +125,7 @@ std::unique_ptr<Scene> build_scene(const XmlScene& xml, const std::string& sourc
             break;
         }
         case ObjectKind::Sensor:
-            if (scene->sensor)
-                throw LoadError(child.location,
-                                "a second <sensor> (penumbra renders one sensor; the first is at " +
-                                    scene->sensor->location.str() + ")");
-            scene->sensor = as<Sensor>(obj, ObjectKind::Sensor);
+            scene->sensors.push_back(as<Sensor>(obj, ObjectKind::Sensor));
             break;
         case ObjectKind::Integrator:
             if (scene->integrator)
@@ -155,12 +145,13 @@ std::unique_ptr<Scene> build_scene(const XmlScene& xml, const std::string& sourc
     for (const auto& [id, node] : xml.ids)
         scene->named_objects[id] = inst.instantiate(*node);
     // Mitsuba's defaults: a perspective sensor with its default film and sampler, and the path tracer.
-    if (!scene->sensor) {
+    if (scene->sensors.empty()) {
         auto obj = inst.create(ObjectKind::Sensor, Properties("perspective", xml.location));
         obj->plugin = "perspective";
         obj->location = xml.location;
-        scene->sensor = as<Sensor>(obj, ObjectKind::Sensor);
+        scene->sensors.push_back(as<Sensor>(obj, ObjectKind::Sensor));
     }
+    scene->sensor = scene->sensors.front();
     if (!scene->integrator) {
         auto obj = inst.create(ObjectKind::Integrator, Properties("path", xml.location));
         obj->plugin = "path";
