@@ -226,7 +226,7 @@ TEST(CamSensor, SeveralSensorsLoadInOrder) {
     auto scene = load_scene_string(R"(<scene version="3.0.0">
       <sensor type="perspective" id="front"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/></film></sensor>
       <sensor type="orthographic" id="top"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
-      <shape type="sphere"><sensor type="irradiancemeter" id="probe"/></shape>
+      <shape type="sphere"><sensor type="irradiancemeter" id="probe"><film type="hdrfilm"><integer name="width" value="1"/><integer name="height" value="1"/></film></sensor></shape>
     </scene>)");
     ASSERT_EQ(scene->sensors.size(), 3u);
     EXPECT_EQ(scene->sensors[0]->id, "front");

@@ -110,3 +110,23 @@ TEST(CLI, AdSuiteWritesItsTableAndPicturesAndReusesTheReference) {
     EXPECT_EQ(unknown.status, 1);
     EXPECT_NE(unknown.output.find("no scene 'no_such_scene'"), std::string::npos) << unknown.output;
 }
+
+// Method options come from the method registry (diff/method.h): each is a flag, checked against --method.
+TEST(CLI, MethodOptionsAreCheckedAgainstTheMethod) {
+    const fs::path dir = temp_dir();
+    const std::string out = (dir / "d.exr").string();
+    const std::string base = "derivative " + cbox + " -D res=16 --param white.reflectance --spp 4 -q -o " + out;
+    Result r = run(base + " --method interior --q 0.3");
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.output.find("option 'q' is not an option of method interior (it belongs to method paths)"),
+              std::string::npos)
+        << r.output;
+    EXPECT_FALSE(fs::exists(out));
+    r = run(base + " --method paths --q 0.3 --sampling bsdf");
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("derivative (paths: path sampling: bsdf sampling + NEE)"), std::string::npos) << r.output;
+    r = run("derivative --help");
+    EXPECT_NE(r.output.find("--primary-spp"), std::string::npos);
+    EXPECT_NE(r.output.find("[method paths]"), std::string::npos);
+    fs::remove_all(dir);
+}

@@ -192,6 +192,11 @@ TEST(PoseConfig, ErrorsAreExplicit) {
     EXPECT_NE(optimize_error(ok, R"(, "method": "interior")").find("cannot optimize a pose"),
               std::string::npos);
     EXPECT_NE(optimize_error(ok, R"(, "method": "psdr2")").find("unknown method 'psdr2'"), std::string::npos);
+    EXPECT_NE(optimize_error(ok, R"(, "method": "psdr", "options": {"q": 0.3})")
+                  .find("option 'q' is not an option of method psdr (it belongs to method paths)"),
+              std::string::npos);
+    EXPECT_NE(optimize_error(ok, R"(, "options": {"first_vertex": "camera"})").find("expected one of auto, image, material"),
+              std::string::npos);
     EXPECT_NE(optimize_error(R"({"camera.bsdf": {"lr": 0.01}})", R"(, "method": "interior", "direct_spp": 4)")
                   .find("'direct_spp' is a boundary-term budget"),
               std::string::npos);

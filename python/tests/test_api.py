@@ -108,3 +108,30 @@ def test_image_files_round_trip(tmp_path):
     image = torch.rand(5, 7, 3)
     penumbra.write_image(tmp_path / "a.exr", image)
     assert torch.allclose(penumbra.read_image(tmp_path / "a.exr"), image)
+
+
+def test_ctrl_c_interrupts_a_long_render(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+    script = tmp_path / "long.py"
+    script.write_text(
+        "import sys, time, penumbra\n"
+        "scene = penumbra.load_file(sys.argv[1])\n"
+        "print('ready', flush=True)\n"
+        "start = time.time()\n"
+        "try:\n"
+        "    penumbra.render(scene, spp=100000)\n"
+        "except KeyboardInterrupt:\n"
+        "    print('interrupted after %.1f s' % (time.time() - start), flush=True)\n"
+        "    penumbra.render(scene, spp=1)\n"  # the module still works afterwards
+        "    print('ok', flush=True)\n")
+    p = subprocess.Popen([sys.executable, str(script), str(SOURCE / "scenes" / "cbox" / "cbox.xml")],
+                         stdout=subprocess.PIPE, text=True)
+    assert p.stdout.readline().strip() == "ready"
+    time.sleep(1.0)
+    p.send_signal(signal.SIGINT)
+    out, _ = p.communicate(timeout=30)
+    assert p.returncode == 0
+    assert "interrupted after" in out and out.strip().endswith("ok"), out

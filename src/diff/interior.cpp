@@ -1,6 +1,7 @@
 #include "diff/interior.h"
 
 #include "core/batch_stats.h"
+#include "core/interrupt.h"
 #include "core/stratified.h"
 #include "diff/material_form.h"
 #include "render/path.h"
@@ -114,6 +115,7 @@ PixelSums forward_batch(const Scene& scene, const Parameters& params, const Diff
         Tape& tape = Tape::current();
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
+                check_interrupt(); // per pixel: Ctrl-C stops long renders promptly (core/interrupt.h)
                 const uint64_t pixel = uint64_t(y) * film.width + x;
                 Vec3d primal(0.0), derivative(0.0);
                 for (int m = 0; m < options.spp; ++m) {
@@ -191,6 +193,7 @@ Gradient render_gradient(const Scene& scene, const Parameters& params, const Ima
         Tape& tape = Tape::current();
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
+                check_interrupt(); // per pixel: Ctrl-C stops long renders promptly (core/interrupt.h)
                 const uint64_t pixel = uint64_t(y) * film.width + x;
                 const Color3f a = adjoint.at(x, y) * inv_spp;
                 Vec3d primal(0.0);

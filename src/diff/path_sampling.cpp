@@ -1,6 +1,7 @@
 #include "diff/path_sampling.h"
 
 #include "core/batch_stats.h"
+#include "core/interrupt.h"
 #include "diff/adaptive_pixels.h"
 #include "render/tiles.h"
 
@@ -72,6 +73,7 @@ PassResult run_pass(const Scene& scene, const Parameters& params, const PathSamp
                             {}};
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
+                check_interrupt(); // per pixel: Ctrl-C stops long renders promptly (core/interrupt.h)
                 const uint64_t pixel = uint64_t(y) * width + x;
                 const int n = budget.count(seed, pixel);
                 if (n == 0) continue;

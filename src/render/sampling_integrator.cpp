@@ -1,3 +1,4 @@
+#include "core/interrupt.h"
 #include "render/integrator.h"
 #include "render/tiles.h"
 #include "core/stratified.h"
@@ -32,6 +33,7 @@ std::vector<Layer> SamplingIntegrator::render(const Scene& scene, const RenderOp
         uint64_t local_dropped = 0;
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
+                check_interrupt(); // per pixel: Ctrl-C stops long renders promptly (core/interrupt.h)
                 const uint64_t pixel = uint64_t(y) * width + x;
                 std::fill(sum.begin(), sum.end(), Color3f(0.f));
                 for (int s = 0; s < spp; ++s) {
