@@ -21,10 +21,17 @@ public:
         : out_(out), seen_(seen), prefix_(std::move(prefix)), owner_(owner) {}
 
     void put(const std::string& name, float* values, int size, int* index, bool geometry) override {
+        put_array(name, values, {size}, index, geometry);
+    }
+    void put_array(const std::string& name, float* values, const std::vector<int>& shape, int* index,
+                   bool geometry) override {
         Parameter p;
         p.name = join(prefix_, name);
         p.data = values;
-        p.size = size;
+        p.size = 1;
+        for (int n : shape)
+            p.size *= n;
+        p.dims = shape;
         p.index = index;
         p.geometry = geometry;
         p.shape = dynamic_cast<Shape*>(owner_);
@@ -65,17 +72,6 @@ std::string shape_name(const Shape& shape, size_t index) {
     return shape.id.empty() ? "shape_" + std::to_string(index) : shape.id;
 }
 
-// The center of the bounding box of the shapes' meshes.
-Vec3f bbox_center(const std::vector<Shape*>& shapes) {
-    Vec3f lo(Infinity), hi(-Infinity);
-    for (const Shape* shape : shapes)
-        for (const Vec3f& p : shape->mesh.positions) {
-            lo = min(lo, p);
-            hi = max(hi, p);
-        }
-    return (lo + hi) * 0.5f;
-}
-
 // The shapes a motion moves: the instance's copies, or its one shape.
 std::vector<Shape*> motion_shapes(const Parameter& p) {
     return p.shapes.empty() ? std::vector<Shape*>{p.shape} : p.shapes;
@@ -106,6 +102,16 @@ Vec3f rotate(const Vec3f& v, const Vec3f& a, float t) {
 }
 
 } // namespace
+
+Vec3f bbox_center(const std::vector<Shape*>& shapes) {
+    Vec3f lo(Infinity), hi(-Infinity);
+    for (const Shape* shape : shapes)
+        for (const Vec3f& p : shape->mesh.positions) {
+            lo = min(lo, p);
+            hi = max(hi, p);
+        }
+    return (lo + hi) * 0.5f;
+}
 
 Parameters::Parameters(Scene& scene) {
     // The estimators read world-space meshes (scene.shapes).
@@ -330,6 +336,20 @@ void Parameters::displace(Scene& scene, double t) {
     if (!moved.empty()) scene.build();
 }
 
+void Parameters::set_direction(const std::vector<float>& direction) {
+    if (direction.size() != size_t(dimension_))
+        throw Error("set_direction: expected " + std::to_string(dimension_) + " values, got " +
+                    std::to_string(direction.size()));
+    direction_ = direction;
+}
+
+void Parameters::rebase(const Scene& scene) {
+    saved_data_.clear();
+    saved_meshes_.clear();
+    saved_emitters_.clear();
+    saved_sensor_ = scene.sensor->to_world;
+}
+
 std::vector<float> Parameters::values() const {
     std::vector<float> v(size_t(dimension_), 0.f);
     for (const auto& [p, index] : enabled_)
@@ -337,7 +357,7 @@ std::vector<float> Parameters::values() const {
     return v;
 }
 
-void Parameters::set_values(Scene& scene, const std::vector<float>& values) {
+void Parameters::set_values(Scene& scene, const std::vector<float>& values, bool rebuild) {
     if (values.size() != size_t(dimension_))
         throw Error("set_values: expected " + std::to_string(dimension_) + " values, got " + std::to_string(values.size()));
     std::set<Shape*> moved;
@@ -351,7 +371,7 @@ void Parameters::set_values(Scene& scene, const std::vector<float>& values) {
     }
     update_moved(moved);
     for (Shape* shape : moved) shape->finalize();
-    if (!moved.empty()) scene.build();
+    if (!moved.empty() && rebuild) scene.build();
     saved_data_.clear(); // the new values are the reference configuration from now on
     saved_meshes_.clear();
 }

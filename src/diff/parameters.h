@@ -34,6 +34,7 @@ struct Parameter {
     Kind kind = Kind::Data;
     float* data = nullptr;  // Data: the values inside the scene object
     int size = 1;           // number of scalars
+    std::vector<int> dims;  // Data: the array's shape ({H, W, 3} images, {N, 3} vertex positions, {3}, {1})
     int* index = nullptr;   // Data: where the object reads its parameter index (core/param.h)
     bool geometry = false;  // changing it moves geometry (the BVH must be rebuilt)
     Shape* shape = nullptr; // motions of shapes, and vertex_positions
@@ -75,6 +76,8 @@ public:
     // Dimension of the enabled parameter vector, and the direction (forward mode) in it.
     int dimension() const { return dimension_; }
     const std::vector<float>& direction() const { return direction_; }
+    // Replaces the direction (dimension() values): a motion's θ may then move at another rate than 1.
+    void set_direction(const std::vector<float>& direction);
     // Enabled parameters with their first index.
     const std::vector<std::pair<const Parameter*, int>>& enabled() const { return enabled_; }
 
@@ -88,15 +91,18 @@ public:
 
     // Values of the enabled parameters (motions read 0: they are displacements from the reference).
     std::vector<float> values() const;
-    // Writes values of the enabled Data parameters into the scene (rebuilding the BVH when geometry changed);
-    // throws Error on non-finite values or motions (use displace() for those).
-    void set_values(Scene& scene, const std::vector<float>& values);
+    // Writes values of the enabled Data parameters into the scene (rebuilding the BVH when geometry changed
+    // and `rebuild`); throws Error on non-finite values or motions (use displace() for those).
+    void set_values(Scene& scene, const std::vector<float>& values, bool rebuild = true);
 
     // Moves the scene to θ0 + t·direction (t = 0 restores the reference configuration) and rebuilds the BVH
     // when geometry moved. Used by finite differences.
     void displace(Scene& scene, double t);
+    // The scene as it is now (moved from outside, e.g. by a ParameterTable) becomes the configuration that
+    // displace(scene, 0) restores.
+    void rebase(const Scene& scene);
 
-private:
+  private:
     void add_motions(Scene& scene);
     std::vector<Parameter> all_;
     std::vector<std::pair<const Parameter*, int>> enabled_;
@@ -111,6 +117,10 @@ private:
     Transform saved_sensor_;
     std::map<Emitter*, Transform> saved_emitters_;
 };
+
+// The center of the bounding box of the shapes' meshes (the default center of their rotate and scale
+// motions).
+Vec3f bbox_center(const std::vector<Shape*>& shapes);
 
 // Parses "name" or "name=v1,v2,..." (the CLI's --param syntax).
 std::pair<std::string, std::vector<float>> parse_param_selection(const std::string& text);

@@ -46,6 +46,25 @@ Mat3d rotation_from_vector(const Vec3d& omega) {
     return r;
 }
 
+// J_l(φ) = I + (1 − cos θ)/θ² [φ]× + (θ − sin θ)/θ³ [φ]×², θ = |φ| (the SO(3) left Jacobian; Barfoot, State
+// Estimation for Robotics, ch. 7).
+Mat3d left_jacobian(const Vec3d& phi) {
+    const double theta2 = dot(phi, phi), theta = std::sqrt(theta2);
+    // Taylor series below 1e-3 rad (the closed forms cancel catastrophically there).
+    const double a = theta < 1e-3 ? 0.5 - theta2 / 24.0 : (1.0 - std::cos(theta)) / theta2;
+    const double b = theta < 1e-3 ? 1.0 / 6.0 - theta2 / 120.0 : (theta - std::sin(theta)) / (theta2 * theta);
+    const double k[3][3] = {{0, -phi.z, phi.y}, {phi.z, 0, -phi.x}, {-phi.y, phi.x, 0}};
+    Mat3d j;
+    for (int i = 0; i < 3; ++i)
+        for (int c = 0; c < 3; ++c) {
+            double k2 = 0;
+            for (int l = 0; l < 3; ++l)
+                k2 += k[i][l] * k[l][c];
+            j.m[i][c] += a * k[i][c] + b * k2;
+        }
+    return j;
+}
+
 Vec3d rotation_vector(const Mat3d& r) {
     // The skew part is sin θ · a, the trace 1 + 2 cos θ.
     const Vec3d w = Vec3d(r.m[2][1] - r.m[1][2], r.m[0][2] - r.m[2][0], r.m[1][0] - r.m[0][1]) * 0.5;
@@ -80,9 +99,12 @@ ShapePose::ShapePose(Shape& shape)
     c0_ = Vec3d((lo + hi) * 0.5f);
 }
 
+ShapePose::ShapePose(Shape& shape, const Vec3d& center)
+    : shape_(shape), positions_(shape.mesh.positions), normals_(shape.mesh.normals), c0_(center) {}
+
 void ShapePose::apply() const {
     for (size_t i = 0; i < positions_.size(); ++i)
-        shape_.mesh.positions[i] = Vec3f(c0_ + t_ + r_ * (Vec3d(positions_[i]) - c0_));
+        shape_.mesh.positions[i] = Vec3f(c0_ + t_ + r_ * (Vec3d(positions_[i]) - c0_) * (1.0 + s_));
     for (size_t i = 0; i < normals_.size(); ++i)
         shape_.mesh.normals[i] = Vec3f(normalize(r_ * Vec3d(normals_[i])));
     shape_.finalize();

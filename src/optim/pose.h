@@ -1,6 +1,6 @@
 // Rigid poses of shapes as optimized quantities. A pose (t, R) moves the shape's reference mesh (the scene's
 // vertices, never the previous iterate) about its reference bounding-box center c0:
-//   x = c0 + t + R (x0 − c0),   n = R n0.
+//   x = c0 + t + (1 + s) R (x0 − c0),   n = R n0   (s: uniform scale, 0 unless set; diff/parameter_table.h).
 // Rotations are updated on the left by the exponential map, R ← exp([ω]×) R with ω a world-space rotation
 // vector about the current center c0 + t: the increments are the same world-frame motions that the gradient
 // is taken with respect to (diff/parameters.h), so Adam's moments live in one fixed tangent frame.
@@ -23,6 +23,9 @@ struct Mat3d {
 
 // exp([ω]×): rotation by |ω| radians about ω / |ω| (Rodrigues).
 Mat3d rotation_from_vector(const Vec3d& omega);
+// The left Jacobian J_l(φ) of SO(3): exp(φ + δ) ≈ exp([J_l(φ) δ]×) exp([φ]×), i.e. a change δ of a rotation
+// vector is the world-frame rotation J_l(φ) δ applied on the left.
+Mat3d left_jacobian(const Vec3d& phi);
 // The inverse (log map): the rotation vector of R, angle in [0, π] radians.
 Vec3d rotation_vector(const Mat3d& r);
 // Geodesic distance: the angle of a bᵀ, radians (atan2 form, accurate near 0).
@@ -32,6 +35,8 @@ class ShapePose {
   public:
     // Remembers the shape's current mesh as the reference (pose t = 0, R = I).
     explicit ShapePose(Shape& shape);
+    // The same about a given center (the common center of an instance's shapes).
+    ShapePose(Shape& shape, const Vec3d& center);
 
     Shape& shape() const { return shape_; }
     const Vec3d& translation() const { return t_; }
@@ -39,7 +44,10 @@ class ShapePose {
     // Current rotation center c0 + t (world).
     Vec3d center() const { return c0_ + t_; }
 
-    void set(const Vec3d& translation, const Mat3d& rotation) { t_ = translation, r_ = rotation; }
+    double scale() const { return s_; }
+    void set(const Vec3d& translation, const Mat3d& rotation, double scale = 0.0) {
+        t_ = translation, r_ = rotation, s_ = scale;
+    }
     // Writes the posed reference mesh into the shape and finalizes it (the caller rebuilds the BVH).
     void apply() const;
 
@@ -49,6 +57,7 @@ class ShapePose {
     Vec3d c0_;
     Vec3d t_{0, 0, 0};
     Mat3d r_;
+    double s_ = 0.0;
 };
 
 } // namespace penumbra

@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace penumbra {
 
@@ -20,6 +21,15 @@ public:
     // `size` floats at `values`; the object evaluates them through `*index` (first parameter index, -1 when
     // not differentiated; see core/param.h). `geometry` marks values that change the BVH (vertex positions).
     virtual void put(const std::string& name, float* values, int size, int* index, bool geometry = false) = 0;
+    // An array of values with its shape (e.g. {H, W, 3} for an image, {N, 3} for vertex positions); visitors
+    // that do not need the shape see put() with the flattened size.
+    virtual void put_array(const std::string& name, float* values, const std::vector<int>& shape, int* index,
+                           bool geometry = false) {
+        int size = 1;
+        for (int n : shape)
+            size *= n;
+        put(name, values, size, index, geometry);
+    }
     // A nested object (texture, BSDF, emitter) whose own parameters are named `name.<param>`.
     virtual void put_object(const std::string& name, Object* object) = 0;
 };

@@ -118,7 +118,7 @@ public:
     // as the radiance is zero wherever that density is.
     void traverse(ParamVisitor& v) override {
         v.put("scale", &scale_, 1, &scale_index_);
-        v.put("data", &image_.pixels[0].x, 3 * int(image_.pixels.size()), &data_index_);
+        v.put_array("data", &image_.pixels[0].x, {image_.height, image_.width, 3}, &data_index_);
     }
 
     bool movable() const override { return true; }

@@ -102,7 +102,7 @@ class BitmapTexture final : public TextureBase<BitmapTexture> {
 #undef PENUMBRA_BITMAP_GRAD
 
     void traverse(ParamVisitor& v) override {
-        v.put("data", &image_.pixels[0].x, int(3 * image_.pixels.size()), &index_);
+        v.put_array("data", &image_.pixels[0].x, {image_.height, image_.width, 3}, &index_);
     }
 
     Color3f mean() const override { return mean_; }
