@@ -233,22 +233,27 @@ TEST(ParameterTable, GetSetRoundTripsAndErrors) {
               "parameter 'box.bsdf.reflectance.value' is selected twice");
     // vertex_positions with a pose of the same shape: refused whether the pose is non-zero or selected.
     const int vertices = table.find("box.vertex_positions");
-    EXPECT_EQ(
-        error_of([&] { table.select(std::vector<int>{vertices}); }),
-        "parameter 'box.vertex_positions': vertex_positions and a pose of the same shape cannot be combined");
+    EXPECT_EQ(error_of([&] { table.select(std::vector<int>{vertices}); }),
+              "parameter 'box': vertex_positions and a pose of the same shape cannot be combined");
     const std::vector<float> zero = {0, 0, 0};
     table.set(rotate, zero.data(), 3);
     table.apply();
-    EXPECT_EQ(
-        error_of([&] {
-            table.select(std::vector<int>{vertices, table.find("box.translate")});
-        }),
-        "parameter 'box.vertex_positions': vertex_positions and a pose of the same shape cannot be combined");
+    EXPECT_EQ(error_of([&] {
+                  table.select(std::vector<int>{vertices, table.find("box.translate")});
+              }),
+              "parameter 'box': vertex_positions and a pose of the same shape cannot be combined");
     EXPECT_NO_THROW(table.select(std::vector<int>{vertices}));
+    // A pose back at 0 and new vertex positions in one apply(): the vertices are those given.
     std::vector<float> x = table.get(vertices);
     x[0] += 0.01f;
+    table.select(std::vector<int>{});
+    table.set(rotate, pose_r.data(), 3);
+    table.apply();
+    table.set(rotate, zero.data(), 3);
     table.set(vertices, x.data(), x.size());
     table.apply();
+    EXPECT_EQ(table.get(vertices), x);
+    EXPECT_EQ(s->shapes[0]->mesh.positions[0].x, x[0]);
     table.set(rotate, pose_r.data(), 3);
     EXPECT_EQ(error_of([&] { table.apply(); }),
               "parameter 'box': vertex_positions and a pose of the same shape cannot be combined");
@@ -331,6 +336,14 @@ TEST(ParameterTable, InstancePoseMovesItsCopies) {
             const Vec3d expected = c0 + to_vec(pose_t) + r * (Vec3d(x0[k][i]) - c0) * (1.0 + pose_s[0]);
             EXPECT_LT(norm(Vec3d(copies[k]->mesh.positions[i]) - expected), 1e-6);
         }
+    // A copy's own pose cannot move it at the same time, nor be selected while the instance is posed.
+    const std::string copy = copies[0]->id + ".translate"; // both.0.translate
+    EXPECT_NE(error_of([&] {
+                  table.select(std::vector<int>{table.find(copy)});
+              }).find("which poses the same shape"),
+              std::string::npos);
+    table.set(table.find(copy), pose_t.data(), 3);
+    EXPECT_NE(error_of([&] { table.apply(); }).find("pose the same shape"), std::string::npos);
 }
 
 // J_l(φ) δ is the world-frame rotation that a change δ of the rotation vector makes:
@@ -381,7 +394,9 @@ TEST(ParameterTable, ForwardDerivativeMatchesValueSpaceFiniteDifferences) {
 }
 
 // Reverse mode: chain() of the gradient equals forward mode on the same samples, ⟨Jᵀa, v⟩ = ⟨a, Jv⟩, for a
-// Data entry and the translate / rotate / scale of a shape and the camera's motions, at non-zero poses.
+// Data entry and the translate / rotate / scale of a shape and the camera's motions, at non-zero poses. Both
+// sums are over the same samples in float: agreement to ~1e-5 of the sum of magnitudes (as in
+// test_diff_interior.cpp).
 TEST(ParameterTable, ReverseModeChainIsTheAdjointOfForwardMode) {
     TempDir dir;
     auto s = load_cube_scene(dir, 16);
@@ -411,15 +426,24 @@ TEST(ParameterTable, ReverseModeChainIsTheAdjointOfForwardMode) {
     const Gradient reverse = psdr_gradient(*s, table.parameters(), adjoint, o);
     const std::vector<std::vector<double>> g = table.chain(reverse.values);
     ASSERT_EQ(g.size(), v.size());
-    std::vector<double> flat;
+    std::vector<double> flat, contributions;
     std::vector<float> direction;
     for (size_t i = 0; i < v.size(); ++i) {
         ASSERT_EQ(g[i].size(), v[i].second.size());
         flat.insert(flat.end(), g[i].begin(), g[i].end());
+        double contribution = 0;
+        for (size_t k = 0; k < g[i].size(); ++k)
+            contribution += g[i][k] * v[i].second[k];
+        std::printf("  %s: <J^T a, v> part %.6g\n", table.entries()[size_t(v[i].first)].name.c_str(),
+                    contribution);
+        contributions.push_back(contribution);
         direction.insert(direction.end(), v[i].second.begin(), v[i].second.end());
     }
     const AdjointPair p = adjoint_pair(adjoint, forward.total, flat, direction);
     std::printf("  <a, Jv> = %.7g, <J^T a, v> = %.7g (scale %.6g)\n", p.forward, p.reverse, p.scale);
     EXPECT_GT(std::abs(p.forward), 0.05 * p.scale);
     EXPECT_NEAR(p.forward, p.reverse, 1e-4 * p.scale);
+    // Every entry's part is far above that tolerance, so that a wrong map of any one of them would show.
+    for (double c : contributions)
+        EXPECT_GT(std::abs(c), 1e-2 * p.scale);
 }

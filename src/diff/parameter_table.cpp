@@ -40,12 +40,6 @@ std::vector<float> floats(const Vec3d& v) { return {float(v.x), float(v.y), floa
 
 // One posed object: shapes (a shape, or an instance's copies), the sensor or a light, and its pose values.
 struct ParameterTable::Pose {
-    struct Values {
-        Vec3d t{0.0}, r{0.0};
-        double s = 0.0;
-        bool zero() const { return t == Vec3d(0.0) && r == Vec3d(0.0) && s == 0.0; }
-        bool operator==(const Values& o) const { return t == o.t && r == o.r && s == o.s; }
-    };
     std::string owner;
     std::vector<Shape*> shapes;
     Sensor* sensor = nullptr;
@@ -54,7 +48,7 @@ struct ParameterTable::Pose {
     std::vector<ShapePose> references;
     Transform reference; // sensor / light: to_world as loaded
     Vec3d c0{0.0};
-    Values values;
+    PoseValues values;
 
     // The current rotation / scaling center c0 + t.
     Vec3d center() const {
@@ -159,11 +153,53 @@ std::vector<Shape*> ParameterTable::deformed_by(const Parameter& p) const {
     return out;
 }
 
+// Poses "in use" (non-zero, or with a selected motion) must not share a shape with a deformed or selected
+// vertex_positions, nor with another non-zero pose: the pose's reference would not be the shape's mesh.
+void ParameterTable::check(const std::vector<PoseValues>& values, std::vector<const Shape*> deformed,
+                           const std::vector<int>& selected) const {
+    std::set<int> seen;
+    for (int entry : selected)
+        if (!seen.insert(entry).second)
+            throw Error("parameter '" + entries_[size_t(entry)].name + "' is selected twice");
+    std::set<int> in_use;
+    for (int entry : selected) {
+        const Parameter& p = *items_[size_t(entry)].param;
+        if (items_[size_t(entry)].pose >= 0)
+            in_use.insert(items_[size_t(entry)].pose);
+        else if (p.geometry && p.shape)
+            for (Shape* shape : deformed_by(p))
+                deformed.push_back(shape);
+    }
+    std::map<const Shape*, size_t> posed; // shapes of non-zero poses
+    for (size_t i = 0; i < poses_.size(); ++i) {
+        if (values[i].zero()) continue;
+        in_use.insert(int(i));
+        for (const Shape* shape : poses_[i]->shapes)
+            if (auto [it, added] = posed.try_emplace(shape, i); !added)
+                throw Error("parameters '" + poses_[it->second]->owner + "' and '" + poses_[i]->owner +
+                            "' pose the same shape; only one of them may be non-zero");
+    }
+    for (int i : in_use)
+        for (const Shape* shape : poses_[size_t(i)]->shapes) {
+            if (std::count(deformed.begin(), deformed.end(), shape))
+                throw Error("parameter '" + poses_[size_t(i)]->owner +
+                            "': vertex_positions and a pose of the same shape cannot be combined");
+            if (auto it = posed.find(shape); it != posed.end() && it->second != size_t(i))
+                throw Error("parameter '" + poses_[size_t(i)]->owner + "' is selected while '" +
+                            poses_[it->second]->owner + "', which poses the same shape, is non-zero");
+        }
+}
+
+std::vector<ParameterTable::PoseValues> ParameterTable::pose_values() const {
+    std::vector<PoseValues> values;
+    for (const auto& pose : poses_)
+        values.push_back(pose->values);
+    return values;
+}
+
 void ParameterTable::apply() {
     // The poses and deformed shapes after this call; nothing changes if they cannot be combined.
-    std::vector<Pose::Values> next;
-    for (const auto& pose : poses_)
-        next.push_back(pose->values);
+    std::vector<PoseValues> next = pose_values();
     std::vector<const Shape*> deformed = deformed_;
     for (const auto& [entry, values] : staged_) {
         const Parameter& p = *items_[size_t(entry)].param;
@@ -173,7 +209,7 @@ void ParameterTable::apply() {
                     deformed.push_back(shape);
             continue;
         }
-        Pose::Values& v = next[size_t(items_[size_t(entry)].pose)];
+        PoseValues& v = next[size_t(items_[size_t(entry)].pose)];
         if (p.kind == Kind::Translate)
             v.t = vec3(values.data());
         else if (p.kind == Kind::Rotate)
@@ -181,23 +217,22 @@ void ParameterTable::apply() {
         else
             v.s = values[0];
     }
-    std::map<const Shape*, std::string> posed;
+    std::vector<int> selected;
+    for (const auto& [entry, direction] : selection_)
+        selected.push_back(entry);
+    check(next, deformed, selected);
+    // Poses that changed, placed from their references (first: a pose back at 0 restores the mesh that a
+    // vertex_positions value then replaces).
+    bool moved = false;
     for (size_t i = 0; i < poses_.size(); ++i) {
-        const Pose& pose = *poses_[i];
-        if (next[i].zero()) continue;
-        for (const Shape* shape : pose.shapes) {
-            if (std::count(deformed.begin(), deformed.end(), shape))
-                throw Error("parameter '" + pose.owner +
-                            "': vertex_positions and a pose of the same shape cannot be combined");
-            if (auto [it, added] = posed.try_emplace(shape, pose.owner); !added)
-                throw Error("parameters '" + it->second + "' and '" + pose.owner +
-                            "' pose the same shape; only one of them may be non-zero");
-        }
+        Pose& pose = *poses_[i];
+        if (pose.values == next[i]) continue;
+        pose.values = next[i];
+        moved |= pose.place();
     }
     // Data values, written without rebuilding the BVH.
     std::vector<std::pair<std::string, std::vector<float>>> data;
     std::vector<float> values;
-    bool moved = false;
     for (const auto& [entry, staged] : staged_) {
         const Parameter& p = *items_[size_t(entry)].param;
         if (p.kind != Kind::Data) continue;
@@ -208,45 +243,11 @@ void ParameterTable::apply() {
     params_->enable(data);
     params_->set_values(scene_, values, false);
     params_->disable_all();
-    // Poses that changed, placed from their references.
-    for (size_t i = 0; i < poses_.size(); ++i) {
-        Pose& pose = *poses_[i];
-        if (pose.values == next[i]) continue;
-        pose.values = next[i];
-        moved |= pose.place();
-    }
     if (moved) scene_.build();
     deformed_ = deformed;
     staged_.clear();
     params_->rebase(scene_);
     enable(selection_, forward_);
-}
-
-void ParameterTable::check_combinations(const std::vector<int>& selected) const {
-    std::set<int> seen;
-    for (int entry : selected)
-        if (!seen.insert(entry).second)
-            throw Error("parameter '" + entries_[size_t(entry)].name + "' is selected twice");
-    for (int a : selected) {
-        const Parameter& p = *items_[size_t(a)].param;
-        if (p.kind != Kind::Data || !p.geometry || !p.shape) continue;
-        for (const Shape* shape : deformed_by(p))
-            for (size_t b = 0; b < items_.size(); ++b) {
-                if (items_[b].pose < 0) continue;
-                const Pose& pose = *poses_[size_t(items_[b].pose)];
-                if (!std::count(pose.shapes.begin(), pose.shapes.end(), shape)) continue;
-                if (!pose.values.zero() || seen.count(int(b)))
-                    throw Error("parameter '" + entries_[size_t(a)].name +
-                                "': vertex_positions and a pose of the same shape cannot be combined");
-            }
-    }
-    for (int entry : selected) {
-        if (items_[size_t(entry)].pose < 0) continue;
-        for (const Shape* shape : pose_of(entry).shapes)
-            if (std::count(deformed_.begin(), deformed_.end(), shape))
-                throw Error("parameter '" + entries_[size_t(entry)].name +
-                            "': vertex_positions and a pose of the same shape cannot be combined");
-    }
 }
 
 void ParameterTable::select(const std::vector<int>& entries) {
@@ -273,7 +274,7 @@ void ParameterTable::enable(const std::vector<std::pair<int, std::vector<float>>
             throw Error("parameter table: no entry " + std::to_string(entry));
         entries.push_back(entry);
     }
-    check_combinations(entries);
+    check(pose_values(), deformed_, entries);
     // Translate and rotate: one motion per world axis; rotations and scaling about the current center c0 + t.
     std::vector<std::pair<std::string, std::vector<float>>> selection;
     std::vector<float> direction;

@@ -59,6 +59,13 @@ class ParameterTable {
     std::vector<std::vector<double>> chain(const std::vector<double>& raw) const;
 
   private:
+    // A pose's values: translation, rotation vector, scale.
+    struct PoseValues {
+        Vec3d t{0.0}, r{0.0};
+        double s = 0.0;
+        bool zero() const { return t == Vec3d(0.0) && r == Vec3d(0.0) && s == 0.0; }
+        bool operator==(const PoseValues& o) const { return t == o.t && r == o.r && s == o.s; }
+    };
     struct Pose;
     struct Item {
         const Parameter* param;
@@ -71,7 +78,9 @@ class ParameterTable {
     int size(int entry) const;
     Pose& pose_of(int entry) const;
     std::vector<Shape*> deformed_by(const Parameter& p) const;
-    void check_combinations(const std::vector<int>& selected) const;
+    std::vector<PoseValues> pose_values() const;
+    void check(const std::vector<PoseValues>& values, std::vector<const Shape*> deformed,
+               const std::vector<int>& selected) const;
     void enable(const std::vector<std::pair<int, std::vector<float>>>& directions, bool forward);
 
     Scene& scene_;
