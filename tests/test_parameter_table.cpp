@@ -151,6 +151,16 @@ DiffCheck forward_check(Scene& scene, ParameterTable& table, const Directions& d
     return c;
 }
 
+// The value-space direction dr′ whose rotation is ω = dr (J_l(r) dr′ = dr, by fixed-point iteration:
+// ‖J_l − I‖ < 0.3 here): a negative control for the J_l map.
+std::vector<float> without_left_jacobian(const std::vector<float>& r, const std::vector<float>& dr) {
+    const Mat3d j = left_jacobian(to_vec(r));
+    Vec3d x = to_vec(dr);
+    for (int k = 0; k < 60; ++k)
+        x = x + (to_vec(dr) - j * x);
+    return {float(x.x), float(x.y), float(x.z)};
+}
+
 } // namespace
 
 // Entries carry Mitsuba's traverse() keys and array shapes; motions are 3-vectors (scale: 1 value).
@@ -379,18 +389,40 @@ TEST(ParameterTable, ForwardDerivativeMatchesValueSpaceFiniteDifferences) {
     EXPECT_TRUE(forward_check(*s, table, {{sc, {1.f}}}, scale, "box.scale").passes());
     const Directions all = {{t, {0.3f, 0.5f, -0.2f}}, {r, dr}, {sc, {0.5f}}};
     EXPECT_TRUE(forward_check(*s, table, all, value_reference(*s, table, all, 1e-2), "all three").passes());
-    // Negative controls: ω = dr (the direction dr′ with J_l(r) dr′ = dr, by fixed-point iteration since
-    // ‖J_l − I‖ ≈ 0.2), and a scale motion of ds instead of ds / (1 + s).
-    const Mat3d j = left_jacobian(to_vec(pose_r));
-    Vec3d naive = to_vec(dr);
-    for (int k = 0; k < 60; ++k)
-        naive = naive + (to_vec(dr) - j * naive);
-    EXPECT_FALSE(forward_check(*s, table, {{r, {float(naive.x), float(naive.y), float(naive.z)}}}, rotate,
+    // Negative controls: ω = dr, and a scale motion of ds instead of ds / (1 + s).
+    EXPECT_FALSE(forward_check(*s, table, {{r, without_left_jacobian(pose_r, dr)}}, rotate,
                                "control: box.rotate without J_l")
                      .passes());
     EXPECT_FALSE(
         forward_check(*s, table, {{sc, {1.f + pose_s[0]}}}, scale, "control: box.scale without 1 / (1 + s)")
             .passes());
+}
+
+// The camera's pose the same way: at a non-zero translation and rotation, the derivative along a rotation
+// direction (about the camera's current position, ω = J_l(r) dr) and a translation direction matches
+// value-space central differences (the whole image moves: interior, silhouettes and the pixel filter's
+// boundary).
+TEST(ParameterTable, CameraPoseDerivativeMatchesValueSpaceFiniteDifferences) {
+    TempDir dir;
+    auto s = load_cube_scene(dir, 24);
+    ParameterTable table(*s);
+    // r: a roll of 0.8 rad about the viewing axis (the cube stays in view); dr: a tilt across it, so that
+    // J_l(r) dr differs from dr by ~0.4 |dr|.
+    const std::vector<float> cam_t = {0.2f, -0.1f, 0.3f}, cam_r = {-0.0573f, -0.2293f, -0.7642f};
+    const int t = table.find("cam.translate"), r = table.find("cam.rotate");
+    table.set(t, cam_t.data(), 3);
+    table.set(r, cam_r.data(), 3);
+    table.apply();
+    const std::vector<float> dr = {0.3f, 0.f, -0.0225f};
+    const Reference reference = value_reference(*s, table, {{r, dr}}, 5e-3);
+    EXPECT_TRUE(forward_check(*s, table, {{r, dr}}, reference, "cam.rotate").passes());
+    EXPECT_FALSE(forward_check(*s, table, {{r, without_left_jacobian(cam_r, dr)}}, reference,
+                               "control: cam.rotate without J_l")
+                     .passes());
+    const Directions both = {{t, {0.5f, 0.2f, -0.3f}}, {r, {0.3f, -0.1f, 0.4f}}};
+    const DiffCheck d =
+        forward_check(*s, table, both, value_reference(*s, table, both, 5e-3), "cam.translate+rotate");
+    EXPECT_TRUE(d.passes()) << describe(d);
 }
 
 // Reverse mode: chain() of the gradient equals forward mode on the same samples, ⟨Jᵀa, v⟩ = ⟨a, Jv⟩, for a
