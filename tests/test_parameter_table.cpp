@@ -237,6 +237,11 @@ TEST(ParameterTable, GetSetRoundTripsAndErrors) {
               "parameter 'box.bsdf.reflectance.value': value 1 is not finite");
     EXPECT_NE(error_of([&] { table.set(table.find("box.scale"), inf.data(), 1); }).find("not finite"),
               std::string::npos);
+    const std::vector<float> flat = {-1.f};
+    EXPECT_NE(error_of([&] { table.set(table.find("box.scale"), flat.data(), 1); }).find("must be positive"),
+              std::string::npos);
+    EXPECT_EQ(error_of([&] { table.get(int(table.entries().size())); }).find("parameter table: no entry"),
+              0u);
     EXPECT_EQ(error_of([&] {
                   table.select(std::vector<int>{albedo, albedo});
               }),

@@ -114,9 +114,16 @@ int ParameterTable::find(const std::string& name) const {
     return int(&p - params_->all().data());
 }
 
+const ParameterTable::Entry& ParameterTable::entry(int index) const {
+    if (index < 0 || size_t(index) >= entries_.size())
+        throw Error("parameter table: no entry " + std::to_string(index) + " (it has " +
+                    std::to_string(entries_.size()) + ")");
+    return entries_[size_t(index)];
+}
+
 int ParameterTable::size(int entry) const {
     int n = 1;
-    for (int d : entries_.at(size_t(entry)).shape)
+    for (int d : this->entry(entry).shape)
         n *= d;
     return n;
 }
@@ -126,8 +133,9 @@ ParameterTable::Pose& ParameterTable::pose_of(int entry) const {
 }
 
 std::vector<float> ParameterTable::get(int entry) const {
+    this->entry(entry);
     if (auto it = staged_.find(entry); it != staged_.end()) return it->second;
-    const Parameter& p = *items_.at(size_t(entry)).param;
+    const Parameter& p = *items_[size_t(entry)].param;
     if (p.kind == Kind::Data) return {p.data, p.data + p.size};
     const Pose& pose = pose_of(entry);
     if (p.kind == Kind::Scale) return {float(pose.values.s)};
@@ -135,13 +143,16 @@ std::vector<float> ParameterTable::get(int entry) const {
 }
 
 void ParameterTable::set(int entry, const float* values, size_t count) {
-    const Entry& e = entries_.at(size_t(entry));
+    const Entry& e = this->entry(entry);
     if (count != size_t(size(entry)))
         throw Error("parameter '" + e.name + "': expected " + std::to_string(size(entry)) + " values, got " +
                     std::to_string(count));
     for (size_t k = 0; k < count; ++k)
         if (!std::isfinite(values[k]))
             throw Error("parameter '" + e.name + "': value " + std::to_string(k) + " is not finite");
+    if (items_[size_t(entry)].param->kind == Kind::Scale && !(values[0] > -1.f))
+        throw Error("parameter '" + e.name +
+                    "': the scale factor 1 + s must be positive, got s = " + std::to_string(values[0]));
     staged_[entry].assign(values, values + count);
 }
 
@@ -260,7 +271,7 @@ void ParameterTable::select(const std::vector<int>& entries) {
 void ParameterTable::select(const std::vector<std::pair<int, std::vector<float>>>& directions) {
     for (const auto& [entry, direction] : directions)
         if (direction.size() != size_t(size(entry)))
-            throw Error("parameter '" + entries_.at(size_t(entry)).name + "': the direction needs " +
+            throw Error("parameter '" + this->entry(entry).name + "': the direction needs " +
                         std::to_string(size(entry)) + " values, got " + std::to_string(direction.size()));
     enable(directions, true);
 }
@@ -270,8 +281,7 @@ void ParameterTable::enable(const std::vector<std::pair<int, std::vector<float>>
         throw Error("parameter table: staged values are not applied yet (call apply() first)");
     std::vector<int> entries;
     for (const auto& [entry, direction] : directions) {
-        if (entry < 0 || size_t(entry) >= entries_.size())
-            throw Error("parameter table: no entry " + std::to_string(entry));
+        this->entry(entry);
         entries.push_back(entry);
     }
     check(pose_values(), deformed_, entries);

@@ -41,8 +41,8 @@ class ParameterTable {
     int find(const std::string& name) const;
     // The entry's values: as last set (staged or applied); motions: the pose's t, r or s.
     std::vector<float> get(int entry) const;
-    // Stages the entry's values (all of them); throws Error naming the entry on a wrong count or a non-finite
-    // value.
+    // Stages the entry's values (all of them); throws Error naming the entry on a wrong count, a non-finite
+    // value or a scale s <= -1.
     void set(int entry, const float* values, size_t count);
     // Writes the staged values into the scene: Data values, poses applied to the reference meshes / sensor /
     // emitter transforms; the BVH is rebuilt once if geometry moved. The selection is made again at the new
@@ -75,6 +75,7 @@ class ParameterTable {
         int entry;
         int offset; // first index in parameters()' layout
     };
+    const Entry& entry(int index) const; // throws Error for an index out of range
     int size(int entry) const;
     Pose& pose_of(int entry) const;
     std::vector<Shape*> deformed_by(const Parameter& p) const;
