@@ -40,12 +40,6 @@ std::vector<float> floats(const Vec3d& v) { return {float(v.x), float(v.y), floa
 
 // One posed object: shapes (a shape, or an instance's copies), the sensor or a light, and its pose values.
 struct ParameterTable::Pose {
-    struct Values {
-        Vec3d t{0.0}, r{0.0};
-        double s = 0.0;
-        bool zero() const { return t == Vec3d(0.0) && r == Vec3d(0.0) && s == 0.0; }
-        bool operator==(const Values& o) const { return t == o.t && r == o.r && s == o.s; }
-    };
     std::string owner;
     std::vector<Shape*> shapes;
     Sensor* sensor = nullptr;
@@ -54,7 +48,7 @@ struct ParameterTable::Pose {
     std::vector<ShapePose> references;
     Transform reference; // sensor / light: to_world as loaded
     Vec3d c0{0.0};
-    Values values;
+    PoseValues values;
 
     // The current rotation / scaling center c0 + t.
     Vec3d center() const {
@@ -66,13 +60,16 @@ struct ParameterTable::Pose {
         if (sensor || emitter) {
             const Transform placed =
                 values.zero() ? reference : rigid_motion(c0, values.t, rotation) * reference;
-            if (sensor) sensor->set_transform(placed);
-            else emitter->set_to_world(placed);
+            if (sensor)
+                sensor->set_transform(placed);
+            else
+                emitter->set_to_world(placed);
             return false;
         }
         if (references.empty()) {
             c0 = Vec3d(bbox_center(shapes));
-            for (Shape* shape : shapes) references.emplace_back(*shape, c0);
+            for (Shape* shape : shapes)
+                references.emplace_back(*shape, c0);
         }
         for (ShapePose& pose : references) {
             pose.set(values.t, rotation, values.s);
@@ -117,17 +114,28 @@ int ParameterTable::find(const std::string& name) const {
     return int(&p - params_->all().data());
 }
 
+const ParameterTable::Entry& ParameterTable::entry(int index) const {
+    if (index < 0 || size_t(index) >= entries_.size())
+        throw Error("parameter table: no entry " + std::to_string(index) + " (it has " +
+                    std::to_string(entries_.size()) + ")");
+    return entries_[size_t(index)];
+}
+
 int ParameterTable::size(int entry) const {
     int n = 1;
-    for (int d : entries_.at(size_t(entry)).shape) n *= d;
+    for (int d : this->entry(entry).shape)
+        n *= d;
     return n;
 }
 
-ParameterTable::Pose& ParameterTable::pose_of(int entry) const { return *poses_[size_t(items_[size_t(entry)].pose)]; }
+ParameterTable::Pose& ParameterTable::pose_of(int entry) const {
+    return *poses_[size_t(items_[size_t(entry)].pose)];
+}
 
 std::vector<float> ParameterTable::get(int entry) const {
+    this->entry(entry);
     if (auto it = staged_.find(entry); it != staged_.end()) return it->second;
-    const Parameter& p = *items_.at(size_t(entry)).param;
+    const Parameter& p = *items_[size_t(entry)].param;
     if (p.kind == Kind::Data) return {p.data, p.data + p.size};
     const Pose& pose = pose_of(entry);
     if (p.kind == Kind::Scale) return {float(pose.values.s)};
@@ -135,13 +143,16 @@ std::vector<float> ParameterTable::get(int entry) const {
 }
 
 void ParameterTable::set(int entry, const float* values, size_t count) {
-    const Entry& e = entries_.at(size_t(entry));
+    const Entry& e = this->entry(entry);
     if (count != size_t(size(entry)))
         throw Error("parameter '" + e.name + "': expected " + std::to_string(size(entry)) + " values, got " +
                     std::to_string(count));
     for (size_t k = 0; k < count; ++k)
         if (!std::isfinite(values[k]))
             throw Error("parameter '" + e.name + "': value " + std::to_string(k) + " is not finite");
+    if (items_[size_t(entry)].param->kind == Kind::Scale && !(values[0] > -1.f))
+        throw Error("parameter '" + e.name +
+                    "': the scale factor 1 + s must be positive, got s = " + std::to_string(values[0]));
     staged_[entry].assign(values, values + count);
 }
 
@@ -153,40 +164,86 @@ std::vector<Shape*> ParameterTable::deformed_by(const Parameter& p) const {
     return out;
 }
 
+// Poses "in use" (non-zero, or with a selected motion) must not share a shape with a deformed or selected
+// vertex_positions, nor with another non-zero pose: the pose's reference would not be the shape's mesh.
+void ParameterTable::check(const std::vector<PoseValues>& values, std::vector<const Shape*> deformed,
+                           const std::vector<int>& selected) const {
+    std::set<int> seen;
+    for (int entry : selected)
+        if (!seen.insert(entry).second)
+            throw Error("parameter '" + entries_[size_t(entry)].name + "' is selected twice");
+    std::set<int> in_use;
+    for (int entry : selected) {
+        const Parameter& p = *items_[size_t(entry)].param;
+        if (items_[size_t(entry)].pose >= 0)
+            in_use.insert(items_[size_t(entry)].pose);
+        else if (p.geometry && p.shape)
+            for (Shape* shape : deformed_by(p))
+                deformed.push_back(shape);
+    }
+    std::map<const Shape*, size_t> posed; // shapes of non-zero poses
+    for (size_t i = 0; i < poses_.size(); ++i) {
+        if (values[i].zero()) continue;
+        in_use.insert(int(i));
+        for (const Shape* shape : poses_[i]->shapes)
+            if (auto [it, added] = posed.try_emplace(shape, i); !added)
+                throw Error("parameters '" + poses_[it->second]->owner + "' and '" + poses_[i]->owner +
+                            "' pose the same shape; only one of them may be non-zero");
+    }
+    for (int i : in_use)
+        for (const Shape* shape : poses_[size_t(i)]->shapes) {
+            if (std::count(deformed.begin(), deformed.end(), shape))
+                throw Error("parameter '" + poses_[size_t(i)]->owner +
+                            "': vertex_positions and a pose of the same shape cannot be combined");
+            if (auto it = posed.find(shape); it != posed.end() && it->second != size_t(i))
+                throw Error("parameter '" + poses_[size_t(i)]->owner + "' is selected while '" +
+                            poses_[it->second]->owner + "', which poses the same shape, is non-zero");
+        }
+}
+
+std::vector<ParameterTable::PoseValues> ParameterTable::pose_values() const {
+    std::vector<PoseValues> values;
+    for (const auto& pose : poses_)
+        values.push_back(pose->values);
+    return values;
+}
+
 void ParameterTable::apply() {
     // The poses and deformed shapes after this call; nothing changes if they cannot be combined.
-    std::vector<Pose::Values> next;
-    for (const auto& pose : poses_) next.push_back(pose->values);
+    std::vector<PoseValues> next = pose_values();
     std::vector<const Shape*> deformed = deformed_;
     for (const auto& [entry, values] : staged_) {
         const Parameter& p = *items_[size_t(entry)].param;
         if (p.kind == Kind::Data) {
             if (p.geometry && p.shape)
-                for (Shape* shape : deformed_by(p)) deformed.push_back(shape);
+                for (Shape* shape : deformed_by(p))
+                    deformed.push_back(shape);
             continue;
         }
-        Pose::Values& v = next[size_t(items_[size_t(entry)].pose)];
-        if (p.kind == Kind::Translate) v.t = vec3(values.data());
-        else if (p.kind == Kind::Rotate) v.r = vec3(values.data());
-        else v.s = values[0];
+        PoseValues& v = next[size_t(items_[size_t(entry)].pose)];
+        if (p.kind == Kind::Translate)
+            v.t = vec3(values.data());
+        else if (p.kind == Kind::Rotate)
+            v.r = vec3(values.data());
+        else
+            v.s = values[0];
     }
-    std::map<const Shape*, std::string> posed;
+    std::vector<int> selected;
+    for (const auto& [entry, direction] : selection_)
+        selected.push_back(entry);
+    check(next, deformed, selected);
+    // Poses that changed, placed from their references (first: a pose back at 0 restores the mesh that a
+    // vertex_positions value then replaces).
+    bool moved = false;
     for (size_t i = 0; i < poses_.size(); ++i) {
-        const Pose& pose = *poses_[i];
-        if (next[i].zero()) continue;
-        for (const Shape* shape : pose.shapes) {
-            if (std::count(deformed.begin(), deformed.end(), shape))
-                throw Error("parameter '" + pose.owner +
-                            "': vertex_positions and a pose of the same shape cannot be combined");
-            if (auto [it, added] = posed.try_emplace(shape, pose.owner); !added)
-                throw Error("parameters '" + it->second + "' and '" + pose.owner +
-                            "' pose the same shape; only one of them may be non-zero");
-        }
+        Pose& pose = *poses_[i];
+        if (pose.values == next[i]) continue;
+        pose.values = next[i];
+        moved |= pose.place();
     }
     // Data values, written without rebuilding the BVH.
     std::vector<std::pair<std::string, std::vector<float>>> data;
     std::vector<float> values;
-    bool moved = false;
     for (const auto& [entry, staged] : staged_) {
         const Parameter& p = *items_[size_t(entry)].param;
         if (p.kind != Kind::Data) continue;
@@ -197,13 +254,6 @@ void ParameterTable::apply() {
     params_->enable(data);
     params_->set_values(scene_, values, false);
     params_->disable_all();
-    // Poses that changed, placed from their references.
-    for (size_t i = 0; i < poses_.size(); ++i) {
-        Pose& pose = *poses_[i];
-        if (pose.values == next[i]) continue;
-        pose.values = next[i];
-        moved |= pose.place();
-    }
     if (moved) scene_.build();
     deformed_ = deformed;
     staged_.clear();
@@ -211,55 +261,30 @@ void ParameterTable::apply() {
     enable(selection_, forward_);
 }
 
-void ParameterTable::check_combinations(const std::vector<int>& selected) const {
-    std::set<int> seen;
-    for (int entry : selected)
-        if (!seen.insert(entry).second) throw Error("parameter '" + entries_[size_t(entry)].name + "' is selected twice");
-    for (int a : selected) {
-        const Parameter& p = *items_[size_t(a)].param;
-        if (p.kind != Kind::Data || !p.geometry || !p.shape) continue;
-        for (const Shape* shape : deformed_by(p))
-            for (size_t b = 0; b < items_.size(); ++b) {
-                if (items_[b].pose < 0) continue;
-                const Pose& pose = *poses_[size_t(items_[b].pose)];
-                if (!std::count(pose.shapes.begin(), pose.shapes.end(), shape)) continue;
-                if (!pose.values.zero() || seen.count(int(b)))
-                    throw Error("parameter '" + entries_[size_t(a)].name +
-                                "': vertex_positions and a pose of the same shape cannot be combined");
-            }
-    }
-    for (int entry : selected) {
-        if (items_[size_t(entry)].pose < 0) continue;
-        for (const Shape* shape : pose_of(entry).shapes)
-            if (std::count(deformed_.begin(), deformed_.end(), shape))
-                throw Error("parameter '" + entries_[size_t(entry)].name +
-                            "': vertex_positions and a pose of the same shape cannot be combined");
-    }
-}
-
 void ParameterTable::select(const std::vector<int>& entries) {
     std::vector<std::pair<int, std::vector<float>>> directions;
-    for (int entry : entries) directions.emplace_back(entry, std::vector<float>{});
+    for (int entry : entries)
+        directions.emplace_back(entry, std::vector<float>{});
     enable(directions, false);
 }
 
 void ParameterTable::select(const std::vector<std::pair<int, std::vector<float>>>& directions) {
     for (const auto& [entry, direction] : directions)
         if (direction.size() != size_t(size(entry)))
-            throw Error("parameter '" + entries_.at(size_t(entry)).name + "': the direction needs " +
+            throw Error("parameter '" + this->entry(entry).name + "': the direction needs " +
                         std::to_string(size(entry)) + " values, got " + std::to_string(direction.size()));
     enable(directions, true);
 }
 
 void ParameterTable::enable(const std::vector<std::pair<int, std::vector<float>>>& directions, bool forward) {
-    if (!staged_.empty()) throw Error("parameter table: staged values are not applied yet (call apply() first)");
+    if (!staged_.empty())
+        throw Error("parameter table: staged values are not applied yet (call apply() first)");
     std::vector<int> entries;
     for (const auto& [entry, direction] : directions) {
-        if (entry < 0 || size_t(entry) >= entries_.size())
-            throw Error("parameter table: no entry " + std::to_string(entry));
+        this->entry(entry);
         entries.push_back(entry);
     }
-    check_combinations(entries);
+    check(pose_values(), deformed_, entries);
     // Translate and rotate: one motion per world axis; rotations and scaling about the current center c0 + t.
     std::vector<std::pair<std::string, std::vector<float>>> selection;
     std::vector<float> direction;
@@ -284,10 +309,13 @@ void ParameterTable::enable(const std::vector<std::pair<int, std::vector<float>>
             offset += 1;
             continue;
         }
-        for (int k = 0; k < 3; ++k) selection.emplace_back(name, std::vector<float>{k == 0 ? 1.f : 0.f, k == 1 ? 1.f : 0.f, k == 2 ? 1.f : 0.f});
+        for (int k = 0; k < 3; ++k)
+            selection.emplace_back(
+                name, std::vector<float>{k == 0 ? 1.f : 0.f, k == 1 ? 1.f : 0.f, k == 2 ? 1.f : 0.f});
         if (forward) {
             const Vec3d v(dir[0], dir[1], dir[2]);
-            const std::vector<float> d = floats(p.kind == Kind::Translate ? v : left_jacobian(pose.values.r) * v);
+            const std::vector<float> d =
+                floats(p.kind == Kind::Translate ? v : left_jacobian(pose.values.r) * v);
             direction.insert(direction.end(), d.begin(), d.end());
         }
         offset += 3;

@@ -41,8 +41,8 @@ class ParameterTable {
     int find(const std::string& name) const;
     // The entry's values: as last set (staged or applied); motions: the pose's t, r or s.
     std::vector<float> get(int entry) const;
-    // Stages the entry's values (all of them); throws Error naming the entry on a wrong count or a non-finite
-    // value.
+    // Stages the entry's values (all of them); throws Error naming the entry on a wrong count, a non-finite
+    // value or a scale s <= -1.
     void set(int entry, const float* values, size_t count);
     // Writes the staged values into the scene: Data values, poses applied to the reference meshes / sensor /
     // emitter transforms; the BVH is rebuilt once if geometry moved. The selection is made again at the new
@@ -54,10 +54,18 @@ class ParameterTable {
     // Forward mode: a direction per entry in its value space (as many values as the entry has).
     void select(const std::vector<std::pair<int, std::vector<float>>>& directions);
     Parameters& parameters() { return *params_; }
-    // A gradient in parameters()' enabled layout mapped to each selected entry's value space (selection order).
+    // A gradient in parameters()' enabled layout mapped to each selected entry's value space (selection
+    // order).
     std::vector<std::vector<double>> chain(const std::vector<double>& raw) const;
 
   private:
+    // A pose's values: translation, rotation vector, scale.
+    struct PoseValues {
+        Vec3d t{0.0}, r{0.0};
+        double s = 0.0;
+        bool zero() const { return t == Vec3d(0.0) && r == Vec3d(0.0) && s == 0.0; }
+        bool operator==(const PoseValues& o) const { return t == o.t && r == o.r && s == o.s; }
+    };
     struct Pose;
     struct Item {
         const Parameter* param;
@@ -67,10 +75,13 @@ class ParameterTable {
         int entry;
         int offset; // first index in parameters()' layout
     };
+    const Entry& entry(int index) const; // throws Error for an index out of range
     int size(int entry) const;
     Pose& pose_of(int entry) const;
     std::vector<Shape*> deformed_by(const Parameter& p) const;
-    void check_combinations(const std::vector<int>& selected) const;
+    std::vector<PoseValues> pose_values() const;
+    void check(const std::vector<PoseValues>& values, std::vector<const Shape*> deformed,
+               const std::vector<int>& selected) const;
     void enable(const std::vector<std::pair<int, std::vector<float>>>& directions, bool forward);
 
     Scene& scene_;

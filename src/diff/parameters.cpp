@@ -29,7 +29,8 @@ public:
         p.name = join(prefix_, name);
         p.data = values;
         p.size = 1;
-        for (int n : shape) p.size *= n;
+        for (int n : shape)
+            p.size *= n;
         p.dims = shape;
         p.index = index;
         p.geometry = geometry;

@@ -91,8 +91,8 @@ public:
 
     // Values of the enabled parameters (motions read 0: they are displacements from the reference).
     std::vector<float> values() const;
-    // Writes values of the enabled Data parameters into the scene (rebuilding the BVH when geometry changed and
-    // `rebuild`); throws Error on non-finite values or motions (use displace() for those).
+    // Writes values of the enabled Data parameters into the scene (rebuilding the BVH when geometry changed
+    // and `rebuild`); throws Error on non-finite values or motions (use displace() for those).
     void set_values(Scene& scene, const std::vector<float>& values, bool rebuild = true);
 
     // Moves the scene to θ0 + t·direction (t = 0 restores the reference configuration) and rebuilds the BVH
@@ -102,7 +102,7 @@ public:
     // displace(scene, 0) restores.
     void rebase(const Scene& scene);
 
-private:
+  private:
     void add_motions(Scene& scene);
     std::vector<Parameter> all_;
     std::vector<std::pair<const Parameter*, int>> enabled_;
@@ -118,7 +118,8 @@ private:
     std::map<Emitter*, Transform> saved_emitters_;
 };
 
-// The center of the bounding box of the shapes' meshes (the default center of their rotate and scale motions).
+// The center of the bounding box of the shapes' meshes (the default center of their rotate and scale
+// motions).
 Vec3f bbox_center(const std::vector<Shape*>& shapes);
 
 // Parses "name" or "name=v1,v2,..." (the CLI's --param syntax).

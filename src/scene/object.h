@@ -26,7 +26,8 @@ public:
     virtual void put_array(const std::string& name, float* values, const std::vector<int>& shape, int* index,
                            bool geometry = false) {
         int size = 1;
-        for (int n : shape) size *= n;
+        for (int n : shape)
+            size *= n;
         put(name, values, size, index, geometry);
     }
     // A nested object (texture, BSDF, emitter) whose own parameters are named `name.<param>`.

@@ -90,8 +90,8 @@ SurfaceInteraction3f Shape::compute_surface_interaction(const Ray& ray, float t,
 void Shape::traverse(ParamVisitor& v) {
     const bool curve = plugin == "linearcurve" || plugin == "bsplinecurve";
     if (!mesh.positions.empty() && !curve && !group_shape)
-        v.put_array("vertex_positions", &mesh.positions[0].x, {int(mesh.vertex_count()), 3}, &vertex_param_index,
-                    true);
+        v.put_array("vertex_positions", &mesh.positions[0].x, {int(mesh.vertex_count()), 3},
+                    &vertex_param_index, true);
     if (bsdf) v.put_object("bsdf", bsdf.get());
     if (emitter) v.put_object("emitter", emitter.get());
 }
