@@ -104,7 +104,7 @@ def main():
     ap.add_argument("--iterations", type=int, default=150)
     ap.add_argument("--res", type=int, default=64)
     ap.add_argument("--spp", type=int, default=8, help="samples per pixel of each image and gradient")
-    ap.add_argument("--subdivisions", type=int, default=3, help="icosphere subdivisions (2: 162, 3: 642 vertices)")
+    ap.add_argument("--subdivisions", type=int, default=2, help="icosphere subdivisions (2: 162, 3: 642 vertices)")
     ap.add_argument("--lam", type=float, default=10.0, help="λ of the preconditioner I + λL")
     ap.add_argument("--lr", type=float, default=0.05)
     ap.add_argument("--out", default=None, help="output directory (default: a new temporary directory)")
