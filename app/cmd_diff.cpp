@@ -27,6 +27,7 @@ struct Common {
     std::string method = "psdr";
     MethodOptions method_options; // the --<option> flags of the methods (diff/method.h) that were given
     std::vector<std::string> defines, params;
+    std::string sensor = "0";
     int spp = 64, threads = 0, batches = 0;
     uint64_t seed = 0;
     std::string output, stderr_output, terms_prefix;
@@ -45,7 +46,16 @@ void add_common(CLI::App* cmd, Common& c, bool needs_params) {
     cmd->add_option("--spp", c.spp, "samples per pixel (in total)")->check(CLI::PositiveNumber);
     cmd->add_option("--seed", c.seed, "random seed");
     cmd->add_option("--threads", c.threads, "worker threads (default: all)")->check(CLI::NonNegativeNumber);
+    cmd->add_option("--sensor", c.sensor,
+                    "the sensor: an index (default 0) or a sensor's id (its motions are <id>.translate/.rotate)");
     cmd->add_flag("-q,--quiet", c.quiet, "no progress bar");
+}
+
+// Loads the scene with -D overrides and selects --sensor.
+std::unique_ptr<Scene> load(const Common& c) {
+    auto scene = load_scene(c.scene, parse_defines(c.defines));
+    scene->select_sensor(c.sensor);
+    return scene;
 }
 
 // --method and every registered method's options (diff/method.h), each flag once; make_method() checks that the
@@ -112,7 +122,7 @@ double image_mean(const Image& img) {
 }
 
 void cmd_params(const Common& c) {
-    auto scene = load_scene(c.scene, parse_defines(c.defines));
+    auto scene = load(c);
     Parameters params(*scene);
     std::printf("%-48s %10s  %s\n", "name", "size", "kind");
     for (const Parameter& p : params.all()) {
@@ -129,7 +139,7 @@ void cmd_params(const Common& c) {
 void cmd_derivative(const Common& c) {
     check_output(c.output);
     auto method = make_method(c.method, c.method_options);
-    auto scene = load_scene(c.scene, parse_defines(c.defines));
+    auto scene = load(c);
     Parameters params(*scene);
     params.enable(selection(c.params));
     const Image importance = c.adjoint.empty() ? Image() : read_image(c.adjoint, false);
@@ -155,7 +165,7 @@ void cmd_derivative(const Common& c) {
 
 void cmd_fd(const Common& c, double eps) {
     check_output(c.output);
-    auto scene = load_scene(c.scene, parse_defines(c.defines));
+    auto scene = load(c);
     Parameters params(*scene);
     params.enable(selection(c.params));
     RenderOptions o;
@@ -175,7 +185,7 @@ void cmd_fd(const Common& c, double eps) {
 void cmd_gradient(const Common& c) {
     if (c.adjoint.empty() == c.target.empty()) throw Error("gradient: give exactly one of --adjoint and --target");
     auto method = make_method(c.method, c.method_options);
-    auto scene = load_scene(c.scene, parse_defines(c.defines));
+    auto scene = load(c);
     Parameters params(*scene);
     if (c.params.empty()) params.enable_all_data();
     else params.enable(selection(c.params));

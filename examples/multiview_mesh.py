@@ -72,14 +72,6 @@ def write_obj(path, verts, faces):
     Path(path).write_text("\n".join(lines) + "\n")
 
 
-def loaded_faces(loaded, written, faces):
-    """The faces in the loaded mesh's vertex order: the OBJ loader numbers vertices in order of first use by
-    the faces (as Mitsuba's does), so the written vertices are matched to the loaded ones by position."""
-    order = torch.cdist(written, loaded).argmin(dim=1)
-    assert torch.equal(order.sort().values, torch.arange(len(loaded))), "the loaded mesh has other vertices"
-    return order[faces]
-
-
 def uniform_laplacian(n, faces):
     """L = D − A of the mesh's edge graph (Nicolet et al. 2021, Sec. 4: the combinatorial Laplacian)."""
     edges = torch.cat([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
@@ -123,7 +115,7 @@ def main():
     targets = render_views(penumbra.load_string(xml, out, mesh="target.obj"), None, 8 * args.spp, 1000)
     scene = penumbra.load_string(xml, out)
     x0 = scene.params()["blob.vertex_positions"]
-    faces = loaded_faces(x0, RADIUS * sphere, faces)
+    faces = scene.faces("blob")  # the loader's vertex order (it numbers vertices in order of first use)
 
     M = torch.eye(len(x0)) + args.lam * uniform_laplacian(len(x0), faces)
     cholesky = torch.linalg.cholesky(M)

@@ -110,12 +110,7 @@ template <typename T> T run_interruptible(const std::function<T()>& work) {
 // Selects sensor `index` for the duration of a call.
 class SensorScope {
 public:
-    SensorScope(Scene& scene, int index) : scene_(scene) {
-        if (index < 0 || index >= int(scene.sensors.size()))
-            throw Error("sensor " + std::to_string(index) + ": the scene has " + std::to_string(scene.sensors.size()) +
-                        " sensor(s)");
-        scene.sensor = scene.sensors[size_t(index)];
-    }
+    SensorScope(Scene& scene, int index) : scene_(scene) { scene.select_sensor(std::to_string(index)); }
     ~SensorScope() { scene_.sensor = scene_.sensors.front(); }
 
 private:
@@ -176,6 +171,22 @@ PYBIND11_MODULE(_penumbra, m) {
              [](const PyScene& s, int sensor) {
                  SensorScope scope(*s.scene, sensor);
                  return s.scene->sensor->sampler->effective_spp(0);
+             })
+        .def("faces",
+             [](const PyScene& s, const std::string& shape) {
+                 // Mitsuba's read-only `<shape>.faces`; shapes are named as in diff/parameters.h.
+                 std::string names;
+                 for (size_t i = 0; i < s.scene->shapes.size(); ++i) {
+                     const Shape& sh = *s.scene->shapes[i];
+                     const std::string name = sh.id.empty() ? "shape_" + std::to_string(i) : sh.id;
+                     if (name == shape) {
+                         py::array_t<int64_t> out({py::ssize_t(sh.mesh.face_count()), py::ssize_t(3)});
+                         std::copy(sh.mesh.indices.begin(), sh.mesh.indices.end(), out.mutable_data());
+                         return out;
+                     }
+                     names += (names.empty() ? "" : ", ") + name;
+                 }
+                 throw Error("unknown shape '" + shape + "' (shapes: " + names + ")");
              })
         .def("entries",
              [](const PyScene& s) {
@@ -268,7 +279,7 @@ PYBIND11_MODULE(_penumbra, m) {
         },
         py::arg("xml"), py::arg("base_dir"), py::arg("defines"));
     m.def(
-        "read_image", [](const std::string& path) { return to_array(read_image(path, false)); }, py::arg("path"));
+        "read_image", [](const std::string& path) { return to_array(read_image(path)); }, py::arg("path"));
     m.def(
         "write_image",
         [](const std::string& path, const py::array_t<float, py::array::c_style | py::array::forcecast>& a) {

@@ -234,4 +234,14 @@ TEST(CamSensor, SeveralSensorsLoadInOrder) {
     EXPECT_EQ(scene->sensors[2]->id, "probe");
     EXPECT_EQ(scene->sensor, scene->sensors[0]);
     EXPECT_EQ(scene->sensors[1]->film->width, 4);
+    scene->select_sensor("top");
+    EXPECT_EQ(scene->sensor, scene->sensors[1]);
+    scene->select_sensor("2");
+    EXPECT_EQ(scene->sensor, scene->sensors[2]);
+    try {
+        scene->select_sensor("side");
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "unknown sensor 'side' (the scene's sensors: 0 (front), 1 (top), 2 (probe))");
+    }
 }

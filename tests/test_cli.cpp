@@ -130,3 +130,22 @@ TEST(CLI, MethodOptionsAreCheckedAgainstTheMethod) {
     EXPECT_NE(r.output.find("[method paths]"), std::string::npos);
     fs::remove_all(dir);
 }
+
+// --sensor picks one of several sensors by index or id (Mitsuba scenes may declare several).
+TEST(CLI, SensorOptionPicksASensor) {
+    const fs::path dir = temp_dir();
+    std::ofstream(dir / "two.xml") << R"(<scene version="3.0.0">
+      <sensor type="perspective" id="wide"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="4"/></film></sensor>
+      <sensor type="perspective" id="square"><film type="hdrfilm"><integer name="width" value="6"/><integer name="height" value="6"/></film></sensor>
+      <shape type="sphere"><transform name="to_world"><translate value="0,0,4"/></transform></shape>
+      <emitter type="constant"/></scene>)";
+    const std::string scene = (dir / "two.xml").string(), out = (dir / "s.exr").string();
+    Result r = run("render " + scene + " --sensor square --spp 1 -q -o " + out);
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("6x6"), std::string::npos) << r.output;
+    r = run("render " + scene + " --sensor 2 --spp 1 -q -o " + out);
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.output.find("unknown sensor '2' (the scene's sensors: 0 (wide), 1 (square))"), std::string::npos)
+        << r.output;
+    fs::remove_all(dir);
+}

@@ -66,6 +66,11 @@ class Scene:
         """[(id, width, height)] of every sensor, in declaration order (render(sensor=) takes an index or id)."""
         return [tuple(s) for s in self._native.sensors()]
 
+    def faces(self, shape):
+        """The triangles of a shape's mesh as an F x 3 int64 tensor of vertex indices (Mitsuba's read-only
+        `<shape>.faces`), in the order of `<shape>.vertex_positions` (a loader may renumber a file's vertices)."""
+        return torch.from_numpy(self._native.faces(shape))
+
     def params(self):
         """The scene's parameters: an ordered mapping name -> float32 CPU tensor (a copy). Motions are values
         too: <shape>.translate (3), .rotate (3, a rotation vector in radians about the bounding-box center),

@@ -67,7 +67,7 @@ def test_sensors_by_index_and_id(box_scene):
     assert torch.equal(side, penumbra.render(box_scene, spp=2, seed=0, sensor=1))
     with pytest.raises(penumbra.Error, match="unknown sensor 'top'"):
         penumbra.render(box_scene, sensor="top")
-    with pytest.raises(penumbra.Error, match="sensor 5"):
+    with pytest.raises(penumbra.Error, match="unknown sensor '5' \\(the scene's sensors: 0 \\(front\\), 1 \\(side\\)\\)"):
         penumbra.render(box_scene, sensor=5)
 
 

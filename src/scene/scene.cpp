@@ -78,6 +78,18 @@ void to_embree(const Transform& t, float xfm[12]) {
 
 } // namespace
 
+void Scene::select_sensor(const std::string& which) {
+    std::string names;
+    for (size_t i = 0; i < sensors.size(); ++i) {
+        if (which == std::to_string(i) || (!sensors[i]->id.empty() && which == sensors[i]->id)) {
+            sensor = sensors[i];
+            return;
+        }
+        names += (i ? ", " : "") + std::to_string(i) + (sensors[i]->id.empty() ? "" : " (" + sensors[i]->id + ")");
+    }
+    throw Error("unknown sensor '" + which + "' (the scene's sensors: " + names + ")");
+}
+
 void Scene::build() {
     if (!sensor) throw Error("scene has no sensor");
     embree_ = std::make_unique<EmbreeState>();

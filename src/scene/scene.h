@@ -32,6 +32,10 @@ public:
     std::map<std::string, std::shared_ptr<Object>> named_objects;
     std::string source_path;
 
+    // Makes `which` (an index into sensors, or a sensor's id) the rendered sensor; throws Error naming the
+    // sensors otherwise.
+    void select_sensor(const std::string& which);
+
     // Builds the BVH, emitter bookkeeping and scene bounds. Must be called after the lists are filled.
     void build();
     // Replaces every instance by world-space copies of its group's shapes (Shape::group_shape), named
