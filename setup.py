@@ -11,16 +11,20 @@ ROOT = Path(__file__).resolve().parent
 
 
 class CMakeBuild(build_ext):
-    """Configures the CMake project for this interpreter and builds only the extension target."""
+    """Configures the CMake project for this interpreter and builds only the extension target. With
+    PENUMBRA_CMAKE_BUILD_DIR set, the extension target of that already configured build is used instead."""
 
     def build_extension(self, ext):
         target = Path(self.get_ext_fullpath(ext.name)).resolve()
-        build = Path(self.build_temp).resolve() / "cmake"
-        build.mkdir(parents=True, exist_ok=True)
         jobs = str(os.cpu_count() or 2)
-        subprocess.run(["cmake", "-S", str(ROOT), "-B", str(build), "-DCMAKE_BUILD_TYPE=Release",
-                        "-DPython_EXECUTABLE=" + sys.executable, "-DPENUMBRA_BUILD_TESTS=OFF",
-                        "-DPENUMBRA_BUILD_BENCH=OFF", "-DPENUMBRA_BUILD_APP=OFF"], check=True)
+        if os.environ.get("PENUMBRA_CMAKE_BUILD_DIR"):
+            build = Path(os.environ["PENUMBRA_CMAKE_BUILD_DIR"]).resolve()
+        else:
+            build = Path(self.build_temp).resolve() / "cmake"
+            build.mkdir(parents=True, exist_ok=True)
+            subprocess.run(["cmake", "-S", str(ROOT), "-B", str(build), "-DCMAKE_BUILD_TYPE=Release",
+                            "-DPython_EXECUTABLE=" + sys.executable, "-DPENUMBRA_BUILD_TESTS=OFF",
+                            "-DPENUMBRA_BUILD_BENCH=OFF", "-DPENUMBRA_BUILD_APP=OFF"], check=True)
         subprocess.run(["cmake", "--build", str(build), "--target", "penumbra_python", "-j", jobs], check=True)
         built = next((build / "python" / "penumbra").glob("_penumbra*.so"))
         target.parent.mkdir(parents=True, exist_ok=True)
