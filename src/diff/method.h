@@ -82,7 +82,7 @@ class DerivativeMethod {
 public:
     virtual ~DerivativeMethod() = default;
     // A method object may keep what it calibrated on its first call (psdr: the split of the budget over its
-    // terms) and reuse it while the film and the parameter dimension stay the same (an optimization loop).
+    // terms) and reuse it while the sensor, its film and the parameter dimension stay the same (an optimization loop).
     virtual MethodDerivative derivative(const Scene& scene, const Parameters& params, const MethodRun& run) = 0;
     virtual MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                                     const MethodRun& run) = 0;

@@ -73,7 +73,7 @@ public:
 private:
     // The options of one run: the interior gets run.spp and the boundary terms the given budgets, or (psdr
     // without given budgets) run.spp is the total, split by a calibration pass whose split is kept while the
-    // film, the parameter dimension and spp stay the same. `adjoint` null: forward mode.
+    // sensor, its film, the parameter dimension and spp stay the same. `adjoint` null: forward mode.
     PsdrOptions options(const Scene& scene, const Parameters& params, const MethodRun& run, const Image* adjoint) {
         const int batches = adjoint ? 1 : run.batches;
         PsdrOptions o;
@@ -96,7 +96,7 @@ private:
             return o;
         }
         const Film& film = *scene.sensor->film;
-        const Key key{adjoint != nullptr, film.width, film.height, params.dimension(), run.spp, batches};
+        const Key key{adjoint != nullptr, scene.sensor.get(), film.width, film.height, params.dimension(), run.spp, batches};
         if (!calibrated_ || !(calibrated_key_ == key)) {
             if (run.verbose) std::fprintf(stderr, "calibrating the terms' budgets...\n");
             calibrated_ = adjoint ? psdr_gradient_budget(scene, params, *adjoint, o, run.spp)
@@ -129,10 +129,11 @@ private:
 
     struct Key {
         bool reverse;
+        const Sensor* sensor;
         int width, height, dimension, spp, batches;
         bool operator==(const Key& o) const {
-            return reverse == o.reverse && width == o.width && height == o.height && dimension == o.dimension &&
-                   spp == o.spp && batches == o.batches;
+            return reverse == o.reverse && sensor == o.sensor && width == o.width && height == o.height &&
+                   dimension == o.dimension && spp == o.spp && batches == o.batches;
         }
     };
 
