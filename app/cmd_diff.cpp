@@ -10,9 +10,9 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -46,8 +46,9 @@ void add_common(CLI::App* cmd, Common& c, bool needs_params) {
     cmd->add_option("--spp", c.spp, "samples per pixel (in total)")->check(CLI::PositiveNumber);
     cmd->add_option("--seed", c.seed, "random seed");
     cmd->add_option("--threads", c.threads, "worker threads (default: all)")->check(CLI::NonNegativeNumber);
-    cmd->add_option("--sensor", c.sensor,
-                    "the sensor: an index (default 0) or a sensor's id (its motions are <id>.translate/.rotate)");
+    cmd->add_option(
+        "--sensor", c.sensor,
+        "the sensor: an index (default 0) or a sensor's id (its motions are <id>.translate/.rotate)");
     cmd->add_flag("-q,--quiet", c.quiet, "no progress bar");
 }
 
@@ -58,8 +59,8 @@ std::unique_ptr<Scene> load(const Common& c) {
     return scene;
 }
 
-// --method and every registered method's options (diff/method.h), each flag once; make_method() checks that the
-// given ones belong to the chosen method.
+// --method and every registered method's options (diff/method.h), each flag once; make_method() checks that
+// the given ones belong to the chosen method.
 void add_method(CLI::App* cmd, Common& c) {
     std::vector<std::string> names;
     std::string help = "derivative method:";
@@ -67,7 +68,8 @@ void add_method(CLI::App* cmd, Common& c) {
     for (const MethodInfo& m : derivative_methods()) {
         names.push_back(m.name);
         help += " " + m.name + " (" + m.help + ");";
-        for (const MethodOption& o : m.options) owners[o.name] += (owners[o.name].empty() ? "" : ", ") + m.name;
+        for (const MethodOption& o : m.options)
+            owners[o.name] += (owners[o.name].empty() ? "" : ", ") + m.name;
     }
     cmd->add_option("--method", c.method, help)->check(CLI::IsMember(names));
     std::set<std::string> added;
@@ -77,10 +79,11 @@ void add_method(CLI::App* cmd, Common& c) {
             const std::string flag = "--" + o.name, text = o.help + " [method " + owners[o.name] + "]";
             const std::string name = o.name;
             if (o.type == MethodOption::Type::Bool)
-                cmd->add_flag_callback(flag, [&c, name] { c.method_options.set(name, "true"); }, text);
+                cmd->add_flag_callback(
+                    flag, [&c, name] { c.method_options.set(name, "true"); }, text);
             else
-                cmd->add_option_function<std::string>(flag, [&c, name](const std::string& v) { c.method_options.set(name, v); },
-                                                      text)
+                cmd->add_option_function<std::string>(
+                       flag, [&c, name](const std::string& v) { c.method_options.set(name, v); }, text)
                     ->type_name(o.type == MethodOption::Type::Int     ? "INT"
                                 : o.type == MethodOption::Type::Float ? "FLOAT"
                                                                       : "TEXT");
@@ -155,7 +158,8 @@ void cmd_derivative(const Common& c) {
         for (const MethodTerm& t : d.terms) {
             const std::string name = c.terms_prefix + "_" + t.name;
             write_signed(name + lower_extension(c.output), t.value);
-            if (!c.stderr_output.empty() && !t.stderr_img.pixels.empty()) write_image(name + "_stderr.exr", t.stderr_img);
+            if (!c.stderr_output.empty() && !t.stderr_img.pixels.empty())
+                write_image(name + "_stderr.exr", t.stderr_img);
         }
     const Film& film = *scene->sensor->film;
     std::fprintf(stderr, "derivative (%s: %s) %dx%d, %d spp in %.2f s, mean %.6g -> %s\n", c.method.c_str(),
@@ -265,11 +269,13 @@ void add_diff_commands(CLI::App& app) {
     add_common(d, *deriv, true);
     d->add_option("-o,--output", deriv->output, "derivative image (.exr values, .png colormap)")->required();
     d->add_option("--stderr", deriv->stderr_output, "per-pixel standard-error image (.exr)");
-    d->add_option("--batches", deriv->batches, "independent batches for --stderr (default 8)")->check(CLI::PositiveNumber);
+    d->add_option("--batches", deriv->batches, "independent batches for --stderr (default 8)")
+        ->check(CLI::PositiveNumber);
     d->add_option("--terms", deriv->terms_prefix,
                   "also write each term's image as PREFIX_interior / _primary / _direct / _indirect (/ _pixel with a box "
                   "filter and a moving camera), and with --stderr their standard errors as PREFIX_<term>_stderr.exr");
-    d->add_option("--adjoint", deriv->adjoint, "adjoint image ∂L/∂I giving the pixel importance (--method paths --adaptive)");
+    d->add_option("--adjoint", deriv->adjoint,
+                  "adjoint image ∂L/∂I giving the pixel importance (--method paths --adaptive)");
     add_method(d, *deriv);
     d->callback([deriv] { cmd_derivative(*deriv); });
 
@@ -284,13 +290,15 @@ void add_diff_commands(CLI::App& app) {
     f->callback([fd, eps] { cmd_fd(*fd, *eps); });
 
     auto grad = std::make_shared<Common>();
-    auto* g = app.add_subcommand("gradient", "reverse mode: dL/dθ for all parameters given an adjoint image ∂L/∂I "
-                                             "(or a target image and a loss)");
+    auto* g =
+        app.add_subcommand("gradient", "reverse mode: dL/dθ for all parameters given an adjoint image ∂L/∂I "
+                                       "(or a target image and a loss)");
     add_common(g, *grad, false);
     g->add_option("--adjoint", grad->adjoint, "adjoint image ∂L/∂I (.exr, the film's size)");
     g->add_option("--target", grad->target,
                   "target image: a primal pass (its own samples) gives the loss and its adjoint");
-    g->add_option("--loss", grad->loss, "loss for --target: l2 or rel_l2")->check(CLI::IsMember({"l2", "rel_l2"}));
+    g->add_option("--loss", grad->loss, "loss for --target: l2 or rel_l2")
+        ->check(CLI::IsMember({"l2", "rel_l2"}));
     g->add_option("-o,--output", grad->output, "gradient as JSON");
     add_method(g, *grad);
     g->callback([grad] { cmd_gradient(*grad); });

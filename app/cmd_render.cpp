@@ -13,8 +13,8 @@ namespace penumbra::cli {
 namespace {
 
 int cmd_render(const std::string& scene_path, const std::string& output, int spp, uint64_t seed, int threads,
-               const std::vector<std::string>& defines, const std::string& integrator, const std::string& sensor,
-               bool quiet) {
+               const std::vector<std::string>& defines, const std::string& integrator,
+               const std::string& sensor, bool quiet) {
     const std::string ext = lower_extension(output);
     if (ext != ".exr" && ext != ".png") throw Error("output '" + output + "': expected a .exr or .png file name");
     auto scene = load_scene(scene_path, parse_defines(defines));
@@ -101,11 +101,12 @@ void add_render_commands(CLI::App& app) {
     render->add_option("--threads", opt->threads, "worker threads (default: all)")->check(CLI::NonNegativeNumber);
     render->add_option("-D", opt->defines, "override a <default> value: name=value");
     render->add_option("--integrator", opt->integrator, "replace the scene's integrator (path, direct, ptracer)");
-    render->add_option("--sensor", opt->sensor, "the sensor to render: an index (default 0) or a sensor's id");
+    render->add_option("--sensor", opt->sensor,
+                       "the sensor to render: an index (default 0) or a sensor's id");
     render->add_flag("-q,--quiet", opt->quiet, "no progress bar");
     render->callback([opt] {
-        cmd_render(opt->scene, opt->output, opt->spp, opt->seed, opt->threads, opt->defines, opt->integrator, opt->sensor,
-                   opt->quiet);
+        cmd_render(opt->scene, opt->output, opt->spp, opt->seed, opt->threads, opt->defines, opt->integrator,
+                   opt->sensor, opt->quiet);
     });
 
     auto info_opt = std::make_shared<Options>();

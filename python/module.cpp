@@ -1,8 +1,8 @@
-// `penumbra._penumbra`: the native half of the Python module. A thin front over the library's API (load scene →
-// parameters → render → derivative / gradient through diff/method.h); python/penumbra/__init__.py turns it into
-// torch tensors and autograd. Images cross without copies (numpy arrays owning the C++ image); the GIL is released
-// while rendering and Ctrl-C interrupts the work (core/interrupt.h); errors arrive as penumbra.Error with
-// penumbra's message (file:line for scene files).
+// `penumbra._penumbra`: the native half of the Python module. A thin front over the library's API (load scene
+// → parameters → render → derivative / gradient through diff/method.h); python/penumbra/__init__.py turns it
+// into torch tensors and autograd. Images cross without copies (numpy arrays owning the C++ image); the GIL
+// is released while rendering and Ctrl-C interrupts the work (core/interrupt.h); errors arrive as
+// penumbra.Error with penumbra's message (file:line for scene files).
 #include "core/interrupt.h"
 #include "diff/method.h"
 #include "diff/parameter_table.h"
@@ -41,8 +41,8 @@ py::array_t<float> to_array(Image image) {
     return py::array_t<float>({h, w, py::ssize_t(3)}, {w * 3 * f, 3 * f, f}, &owned->pixels[0].x, free_image);
 }
 
-Image from_array(const py::array_t<float, py::array::c_style | py::array::forcecast>& a, int width, int height,
-                 const char* what) {
+Image from_array(const py::array_t<float, py::array::c_style | py::array::forcecast>& a, int width,
+                 int height, const char* what) {
     if (a.ndim() != 3 || a.shape(0) != height || a.shape(1) != width || a.shape(2) != 3)
         throw Error(std::string(what) + ": expected an array of shape (" + std::to_string(height) + ", " +
                     std::to_string(width) + ", 3), the film's size");
@@ -62,8 +62,10 @@ std::map<std::string, std::string> strings(const py::dict& d) {
     std::map<std::string, std::string> out;
     for (const auto& [k, v] : d) {
         std::string value;
-        if (py::isinstance<py::bool_>(v)) value = v.cast<bool>() ? "true" : "false";
-        else value = py::str(v);
+        if (py::isinstance<py::bool_>(v))
+            value = v.cast<bool>() ? "true" : "false";
+        else
+            value = py::str(v);
         out[py::str(k)] = value;
     }
     return out;
@@ -109,11 +111,11 @@ template <typename T> T run_interruptible(const std::function<T()>& work) {
 
 // Selects sensor `index` for the duration of a call.
 class SensorScope {
-public:
+  public:
     SensorScope(Scene& scene, int index) : scene_(scene) { scene.select_sensor(std::to_string(index)); }
     ~SensorScope() { scene_.sensor = scene_.sensors.front(); }
 
-private:
+  private:
     Scene& scene_;
 };
 
@@ -124,7 +126,8 @@ void check_sensor_motions(const PyScene& s, const std::vector<int>& entries, int
     for (int e : entries) {
         const std::string& name = s.table->entries()[size_t(e)].name;
         if (name == id + ".translate" || name == id + ".rotate")
-            throw Error("'" + name + "' moves the first sensor; it cannot be differentiated while rendering sensor " +
+            throw Error("'" + name +
+                        "' moves the first sensor; it cannot be differentiated while rendering sensor " +
                         std::to_string(sensor));
     }
 }
@@ -202,7 +205,8 @@ PYBIND11_MODULE(_penumbra, m) {
                  return py::array_t<float>(py::ssize_t(v.size()), v.data());
              })
         .def("set",
-             [](PyScene& s, int entry, const py::array_t<float, py::array::c_style | py::array::forcecast>& values) {
+             [](PyScene& s, int entry,
+                const py::array_t<float, py::array::c_style | py::array::forcecast>& values) {
                  std::lock_guard<std::mutex> lock(s.mutex);
                  s.table->set(entry, values.data(), size_t(values.size()));
              })
@@ -211,22 +215,24 @@ PYBIND11_MODULE(_penumbra, m) {
                  std::lock_guard<std::mutex> lock(s.mutex);
                  run_interruptible<int>([&] { return s.table->apply(), 0; });
              })
-        .def("render",
-             [](PyScene& s, int spp, uint64_t seed, int threads, int sensor) {
-                 std::lock_guard<std::mutex> lock(s.mutex);
-                 return to_array(run_interruptible<Image>([&] {
-                     SensorScope scope(*s.scene, sensor);
-                     RenderOptions o;
-                     o.spp = spp;
-                     o.seed = seed;
-                     o.threads = threads;
-                     return render(*s.scene, o);
-                 }));
-             },
-             py::arg("spp"), py::arg("seed"), py::arg("threads"), py::arg("sensor"))
+        .def(
+            "render",
+            [](PyScene& s, int spp, uint64_t seed, int threads, int sensor) {
+                std::lock_guard<std::mutex> lock(s.mutex);
+                return to_array(run_interruptible<Image>([&] {
+                    SensorScope scope(*s.scene, sensor);
+                    RenderOptions o;
+                    o.spp = spp;
+                    o.seed = seed;
+                    o.threads = threads;
+                    return render(*s.scene, o);
+                }));
+            },
+            py::arg("spp"), py::arg("seed"), py::arg("threads"), py::arg("sensor"))
         .def("gradient",
-             [](PyScene& s, const std::vector<int>& entries, const py::array_t<float, py::array::c_style | py::array::forcecast>& adjoint,
-                int spp, uint64_t seed, int threads, int sensor, const std::string& method, const py::dict& options) {
+             [](PyScene& s, const std::vector<int>& entries,
+                const py::array_t<float, py::array::c_style | py::array::forcecast>& adjoint, int spp,
+                uint64_t seed, int threads, int sensor, const std::string& method, const py::dict& options) {
                  std::lock_guard<std::mutex> lock(s.mutex);
                  check_sensor_motions(s, entries, sensor);
                  DerivativeMethod& dm = method_for(s, method, options);
@@ -234,10 +240,11 @@ PYBIND11_MODULE(_penumbra, m) {
                  SensorScope scope(*s.scene, sensor);
                  const Film& film = *s.scene->sensor->film;
                  const Image a = from_array(adjoint, film.width, film.height, "adjoint image");
-                 const std::vector<std::vector<double>> g = run_interruptible<std::vector<std::vector<double>>>([&] {
-                     s.table->select(entries);
-                     return s.table->chain(dm.gradient(*s.scene, s.table->parameters(), a, run).values);
-                 });
+                 const std::vector<std::vector<double>> g =
+                     run_interruptible<std::vector<std::vector<double>>>([&] {
+                         s.table->select(entries);
+                         return s.table->chain(dm.gradient(*s.scene, s.table->parameters(), a, run).values);
+                     });
                  py::list out;
                  for (const std::vector<double>& v : g) {
                      py::array_t<float> arr(py::ssize_t(v.size()));
@@ -246,23 +253,25 @@ PYBIND11_MODULE(_penumbra, m) {
                  }
                  return out;
              })
-        .def("derivative",
-             [](PyScene& s, const std::vector<std::pair<int, std::vector<float>>>& directions, int spp, uint64_t seed,
-                int threads, int sensor, int batches, const std::string& method, const py::dict& options) {
-                 std::lock_guard<std::mutex> lock(s.mutex);
-                 std::vector<int> entries;
-                 for (const auto& d : directions) entries.push_back(d.first);
-                 check_sensor_motions(s, entries, sensor);
-                 DerivativeMethod& dm = method_for(s, method, options);
-                 const MethodRun run = run_settings(spp, seed, threads, batches);
-                 SensorScope scope(*s.scene, sensor);
-                 MethodDerivative d = run_interruptible<MethodDerivative>([&] {
-                     s.table->select(directions);
-                     return dm.derivative(*s.scene, s.table->parameters(), run);
-                 });
-                 py::object se = d.stderr_img.pixels.empty() ? py::object(py::none()) : py::object(to_array(std::move(d.stderr_img)));
-                 return py::make_tuple(to_array(std::move(d.derivative)), se);
-             });
+        .def("derivative", [](PyScene& s, const std::vector<std::pair<int, std::vector<float>>>& directions,
+                              int spp, uint64_t seed, int threads, int sensor, int batches,
+                              const std::string& method, const py::dict& options) {
+            std::lock_guard<std::mutex> lock(s.mutex);
+            std::vector<int> entries;
+            for (const auto& d : directions)
+                entries.push_back(d.first);
+            check_sensor_motions(s, entries, sensor);
+            DerivativeMethod& dm = method_for(s, method, options);
+            const MethodRun run = run_settings(spp, seed, threads, batches);
+            SensorScope scope(*s.scene, sensor);
+            MethodDerivative d = run_interruptible<MethodDerivative>([&] {
+                s.table->select(directions);
+                return dm.derivative(*s.scene, s.table->parameters(), run);
+            });
+            py::object se = d.stderr_img.pixels.empty() ? py::object(py::none())
+                                                        : py::object(to_array(std::move(d.stderr_img)));
+            return py::make_tuple(to_array(std::move(d.derivative)), se);
+        });
 
     m.def(
         "load_file",
@@ -275,7 +284,8 @@ PYBIND11_MODULE(_penumbra, m) {
         "load_string",
         [](const std::string& xml, const std::string& base_dir, const py::dict& defines) {
             const std::map<std::string, std::string> d = strings(defines);
-            return wrap(run_interruptible<std::unique_ptr<Scene>>([&] { return load_scene_string(xml, base_dir, d); }));
+            return wrap(run_interruptible<std::unique_ptr<Scene>>(
+                [&] { return load_scene_string(xml, base_dir, d); }));
         },
         py::arg("xml"), py::arg("base_dir"), py::arg("defines"));
     m.def(

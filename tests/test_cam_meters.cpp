@@ -169,8 +169,8 @@ TEST(CamMeters, IrradianceMeterUnderADiskLight) {
 }
 
 TEST(CamMeters, IrradianceMeterErrors) {
-    // Its film must have one pixel; other sensors cannot be nested in a shape; another sensor may sit beside it
-    // (several sensors per scene, as in Mitsuba).
+    // Its film must have one pixel; other sensors cannot be nested in a shape; another sensor may sit beside
+    // it (several sensors per scene, as in Mitsuba).
     EXPECT_THROW(load_scene_string(irradiance_scene("")), LoadError); // the default 768x576 film
     const std::string nested_camera =
         R"(<scene version="3.0.0"><shape type="disk"><sensor type="perspective"/></shape></scene>)";
@@ -180,5 +180,6 @@ TEST(CamMeters, IrradianceMeterErrors) {
     } catch (const LoadError& e) {
         EXPECT_NE(std::string(e.what()).find("irradiancemeter"), std::string::npos) << e.what();
     }
-    EXPECT_EQ(load_scene_string(irradiance_scene(R"(<sensor type="perspective"/>)", OnePixel))->sensors.size(), 2u);
+    EXPECT_EQ(
+        load_scene_string(irradiance_scene(R"(<sensor type="perspective"/>)", OnePixel))->sensors.size(), 2u);
 }

@@ -115,7 +115,8 @@ TEST(CLI, AdSuiteWritesItsTableAndPicturesAndReusesTheReference) {
 TEST(CLI, MethodOptionsAreCheckedAgainstTheMethod) {
     const fs::path dir = temp_dir();
     const std::string out = (dir / "d.exr").string();
-    const std::string base = "derivative " + cbox + " -D res=16 --param white.reflectance --spp 4 -q -o " + out;
+    const std::string base =
+        "derivative " + cbox + " -D res=16 --param white.reflectance --spp 4 -q -o " + out;
     Result r = run(base + " --method interior --q 0.3");
     EXPECT_NE(r.status, 0);
     EXPECT_NE(r.output.find("option 'q' is not an option of method interior (it belongs to method paths)"),
@@ -124,7 +125,8 @@ TEST(CLI, MethodOptionsAreCheckedAgainstTheMethod) {
     EXPECT_FALSE(fs::exists(out));
     r = run(base + " --method paths --q 0.3 --sampling bsdf");
     EXPECT_EQ(r.status, 0) << r.output;
-    EXPECT_NE(r.output.find("derivative (paths: path sampling: bsdf sampling + NEE)"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("derivative (paths: path sampling: bsdf sampling + NEE)"), std::string::npos)
+        << r.output;
     r = run("derivative --help");
     EXPECT_NE(r.output.find("--primary-spp"), std::string::npos);
     EXPECT_NE(r.output.find("[method paths]"), std::string::npos);
@@ -145,7 +147,8 @@ TEST(CLI, SensorOptionPicksASensor) {
     EXPECT_NE(r.output.find("6x6"), std::string::npos) << r.output;
     r = run("render " + scene + " --sensor 2 --spp 1 -q -o " + out);
     EXPECT_NE(r.status, 0);
-    EXPECT_NE(r.output.find("unknown sensor '2' (the scene's sensors: 0 (wide), 1 (square))"), std::string::npos)
+    EXPECT_NE(r.output.find("unknown sensor '2' (the scene's sensors: 0 (wide), 1 (square))"),
+              std::string::npos)
         << r.output;
     fs::remove_all(dir);
 }

@@ -29,7 +29,8 @@ std::unique_ptr<Scene> small_scene() {
 
 std::string error_of(const std::string& method, const std::map<std::string, std::string>& given) {
     MethodOptions o;
-    for (const auto& [k, v] : given) o.set(k, v);
+    for (const auto& [k, v] : given)
+        o.set(k, v);
     try {
         make_method(method, o);
     } catch (const Error& e) {
@@ -40,28 +41,36 @@ std::string error_of(const std::string& method, const std::map<std::string, std:
 
 void expect_same(const Image& a, const Image& b) {
     ASSERT_EQ(a.pixels.size(), b.pixels.size());
-    for (size_t i = 0; i < a.pixels.size(); ++i) ASSERT_EQ(a.pixels[i], b.pixels[i]) << "pixel " << i;
+    for (size_t i = 0; i < a.pixels.size(); ++i)
+        ASSERT_EQ(a.pixels[i], b.pixels[i]) << "pixel " << i;
 }
 
 } // namespace
 
 TEST(Method, RegistryListsTheMethodsWithPsdrFirst) {
     std::vector<std::string> names;
-    for (const MethodInfo& m : derivative_methods()) names.push_back(m.name);
+    for (const MethodInfo& m : derivative_methods())
+        names.push_back(m.name);
     EXPECT_EQ(names, (std::vector<std::string>{"psdr", "interior", "paths"}));
-    EXPECT_NE(std::string(error_of("nope", {})).find("unknown method 'nope' (known methods: psdr, interior, paths)"),
+    EXPECT_NE(std::string(error_of("nope", {}))
+                  .find("unknown method 'nope' (known methods: psdr, interior, paths)"),
               std::string::npos);
 }
 
 TEST(Method, OptionsAreChecked) {
-    EXPECT_EQ(error_of("psdr", {{"primary-spp", "8"}, {"first-vertex", "material"}, {"no-guiding", "true"}}), "");
-    EXPECT_NE(error_of("psdr", {{"q", "0.3"}}).find("option 'q' is not an option of method psdr (it belongs to method paths)"),
+    EXPECT_EQ(error_of("psdr", {{"primary-spp", "8"}, {"first-vertex", "material"}, {"no-guiding", "true"}}),
+              "");
+    EXPECT_NE(error_of("psdr", {{"q", "0.3"}})
+                  .find("option 'q' is not an option of method psdr (it belongs to method paths)"),
               std::string::npos);
-    EXPECT_NE(error_of("paths", {{"q", "1.5"}}).find("'q' = '1.5': expected a value in [0, 0.999]"), std::string::npos);
+    EXPECT_NE(error_of("paths", {{"q", "1.5"}}).find("'q' = '1.5': expected a value in [0, 0.999]"),
+              std::string::npos);
     EXPECT_NE(error_of("psdr", {{"primary-spp", "4.5"}}).find("expected an integer"), std::string::npos);
-    EXPECT_NE(error_of("psdr", {{"primary-spp", "-1"}}).find("expected a value in [0, inf]"), std::string::npos);
-    EXPECT_NE(error_of("interior", {{"first-vertex", "camera"}}).find("expected one of auto, image, material"),
+    EXPECT_NE(error_of("psdr", {{"primary-spp", "-1"}}).find("expected a value in [0, inf]"),
               std::string::npos);
+    EXPECT_NE(
+        error_of("interior", {{"first-vertex", "camera"}}).find("expected one of auto, image, material"),
+        std::string::npos);
     EXPECT_NE(error_of("paths", {{"no-nee", "maybe"}}).find("expected true or false"), std::string::npos);
     EXPECT_NE(error_of("paths", {{"bogus", "1"}}).find("option 'bogus' is not an option of method paths"),
               std::string::npos);
@@ -73,7 +82,8 @@ TEST(Method, PsdrAdapterIsTheEstimator) {
     Parameters params(*scene);
     params.enable({{"box.translate", {1, 0, 0}}});
     MethodOptions given;
-    for (const char* term : {"primary-spp", "direct-spp", "indirect-spp", "pixel-spp"}) given.set(term, "4");
+    for (const char* term : {"primary-spp", "direct-spp", "indirect-spp", "pixel-spp"})
+        given.set(term, "4");
     MethodRun run;
     run.spp = 8;
     run.batches = 2;
@@ -93,7 +103,8 @@ TEST(Method, PsdrAdapterIsTheEstimator) {
     expect_same(d.terms[1].value, ref.primary);
 
     Image adjoint(16, 16);
-    for (size_t i = 0; i < adjoint.pixels.size(); ++i) adjoint.pixels[i] = Color3f(float(i % 7) - 3.f, 1.f, 0.5f);
+    for (size_t i = 0; i < adjoint.pixels.size(); ++i)
+        adjoint.pixels[i] = Color3f(float(i % 7) - 3.f, 1.f, 0.5f);
     run.batches = 1;
     const MethodGradient g = make_method("psdr", given)->gradient(*scene, params, adjoint, run);
     o.interior.spp = 8;
@@ -130,7 +141,8 @@ TEST(Method, PathsAdapterIsTheEstimator) {
     run.spp = 8;
     run.seed = 3;
     Image adjoint(16, 16);
-    for (Color3f& c : adjoint.pixels) c = Color3f(1.f, -0.5f, 0.25f);
+    for (Color3f& c : adjoint.pixels)
+        c = Color3f(1.f, -0.5f, 0.25f);
     const MethodGradient g = make_method("paths", given)->gradient(*scene, params, adjoint, run);
     PathSamplingOptions o;
     o.spp = 8;

@@ -115,7 +115,8 @@ TEST(PoseGradient, MatchesFiniteDifferencesOfTheLoss) {
     const int batches = 16;
     std::vector<Stats> grad(n), interior(n), fd(n);
     MethodOptions budget;
-    for (const char* term : {"primary-spp", "direct-spp"}) budget.set(term, "32");
+    for (const char* term : {"primary-spp", "direct-spp"})
+        budget.set(term, "32");
     budget.set("indirect-spp", "4");
     budget.set("pixel-spp", "4");
     const auto psdr = make_method("psdr", budget);
@@ -195,7 +196,8 @@ TEST(PoseConfig, ErrorsAreExplicit) {
     EXPECT_NE(optimize_error(ok, R"(, "method": "psdr", "options": {"q": 0.3})")
                   .find("option 'q' is not an option of method psdr (it belongs to method paths)"),
               std::string::npos);
-    EXPECT_NE(optimize_error(ok, R"(, "options": {"first_vertex": "camera"})").find("expected one of auto, image, material"),
+    EXPECT_NE(optimize_error(ok, R"(, "options": {"first_vertex": "camera"})")
+                  .find("expected one of auto, image, material"),
               std::string::npos);
     EXPECT_NE(optimize_error(R"({"camera.bsdf": {"lr": 0.01}})", R"(, "method": "interior", "direct_spp": 4)")
                   .find("'direct_spp' is a boundary-term budget"),

@@ -1,5 +1,6 @@
-// Cooperative interruption of long work (Ctrl-C in the Python module): a front requests it, the parallel loops
-// check it between work items and throw Interrupted, which unwinds like any Error (no partial output is written).
+// Cooperative interruption of long work (Ctrl-C in the Python module): a front requests it, the parallel
+// loops check it between work items and throw Interrupted, which unwinds like any Error (no partial output is
+// written).
 #pragma once
 #include "core/error.h"
 

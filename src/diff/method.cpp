@@ -85,8 +85,8 @@ std::string MethodOptions::get_string(const std::string& name, const std::string
     return it == values_.end() ? fallback : it->second;
 }
 
-MethodGradient DerivativeMethod::loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
-                                               LossKind loss, const MethodRun& run) {
+MethodGradient DerivativeMethod::loss_gradient(const Scene& scene, const Parameters& params,
+                                               const Image& target, LossKind loss, const MethodRun& run) {
     const auto start = std::chrono::steady_clock::now();
     // The primal takes its own samples: for a nonlinear loss, E[∂L/∂I(Î)] · E[dÎ/dθ] needs independence.
     RenderOptions ro;
@@ -106,7 +106,8 @@ MethodGradient DerivativeMethod::loss_gradient(const Scene& scene, const Paramet
 }
 
 const std::vector<MethodInfo>& derivative_methods() {
-    static const std::vector<MethodInfo> methods = {psdr_method_info(), interior_method_info(), paths_method_info()};
+    static const std::vector<MethodInfo> methods = {psdr_method_info(), interior_method_info(),
+                                                    paths_method_info()};
     return methods;
 }
 

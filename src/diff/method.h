@@ -1,12 +1,12 @@
-// One front for every derivative method. A method (psdr, paths, and later was, war, war-bdpt, dpm-c, dpm-g) has
-// a name, declares its options, and computes
+// One front for every derivative method. A method (psdr, paths, and later was, war, war-bdpt, dpm-c, dpm-g)
+// has a name, declares its options, and computes
 //   derivative   forward mode: dI/dθ along params.direction(), with per-pixel standard errors from batches;
 //   gradient     reverse mode: dL/dθ for every enabled parameter scalar, given an adjoint image ∂L/∂I;
 //   loss_gradient  the same for an image loss against a target (by default: a primal render with its own
 //                samples gives the loss and its adjoint, then gradient()).
 // The command line (`penumbra derivative | gradient | optimize`) and the Python module reach methods only
-// through derivative_methods(): a method registered there appears in both fronts, its options as `--name value`
-// flags (bool options: `--name`) and as Python keyword arguments (`-` spelled `_`).
+// through derivative_methods(): a method registered there appears in both fronts, its options as `--name
+// value` flags (bool options: `--name`) and as Python keyword arguments (`-` spelled `_`).
 #pragma once
 #include "core/image.h"
 #include "diff/parameters.h"
@@ -33,7 +33,7 @@ struct MethodOption {
 
 // The options a user gave, as text, checked against the method's declarations by make_method().
 class MethodOptions {
-public:
+  public:
     void set(const std::string& name, const std::string& value) { values_[name] = value; }
     bool has(const std::string& name) const { return values_.count(name) > 0; }
     int get_int(const std::string& name, int fallback) const;
@@ -42,18 +42,19 @@ public:
     std::string get_string(const std::string& name, const std::string& fallback) const;
     const std::map<std::string, std::string>& values() const { return values_; }
 
-private:
+  private:
     std::map<std::string, std::string> values_;
 };
 
 // What every method is run with.
 struct MethodRun {
-    int spp = 64;       // samples per pixel in total (a method splits them over its terms and passes)
-    int batches = 1;    // derivative: independent batches giving per-pixel standard errors
+    int spp = 64;    // samples per pixel in total (a method splits them over its terms and passes)
+    int batches = 1; // derivative: independent batches giving per-pixel standard errors
     uint64_t seed = 0;
-    int threads = 0;    // 0 = all
-    bool verbose = false;           // report calibrations and costs on stderr
-    const Image* importance = nullptr; // derivative: a pixel importance |∂L/∂I| a method may sample by (or null)
+    int threads = 0;      // 0 = all
+    bool verbose = false; // report calibrations and costs on stderr
+    const Image* importance =
+        nullptr; // derivative: a pixel importance |∂L/∂I| a method may sample by (or null)
     std::function<void(float)> progress;
 };
 
@@ -66,7 +67,7 @@ struct MethodDerivative {
     Image derivative;
     Image stderr_img;              // empty with one batch
     std::vector<MethodTerm> terms; // the method's terms separately (psdr: interior, primary, ...), or empty
-    std::string description;       // one line for the log ("interior + boundary terms, image-space first vertex")
+    std::string description; // one line for the log ("interior + boundary terms, image-space first vertex")
     double seconds = 0;
 };
 
@@ -79,11 +80,13 @@ struct MethodGradient {
 };
 
 class DerivativeMethod {
-public:
+  public:
     virtual ~DerivativeMethod() = default;
     // A method object may keep what it calibrated on its first call (psdr: the split of the budget over its
-    // terms) and reuse it while the sensor, its film and the parameter dimension stay the same (an optimization loop).
-    virtual MethodDerivative derivative(const Scene& scene, const Parameters& params, const MethodRun& run) = 0;
+    // terms) and reuse it while the sensor, its film and the parameter dimension stay the same (an
+    // optimization loop).
+    virtual MethodDerivative derivative(const Scene& scene, const Parameters& params,
+                                        const MethodRun& run) = 0;
     virtual MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                                     const MethodRun& run) = 0;
     virtual MethodGradient loss_gradient(const Scene& scene, const Parameters& params, const Image& target,

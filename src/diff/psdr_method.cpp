@@ -1,5 +1,5 @@
-// The methods `psdr` (the total derivative of paper 001 Eq. 19: interior + boundary terms, diff/psdr.h, with the
-// budget split by diff/budget.h) and `interior` (the material-form interior term alone) behind the common
+// The methods `psdr` (the total derivative of paper 001 Eq. 19: interior + boundary terms, diff/psdr.h, with
+// the budget split by diff/budget.h) and `interior` (the material-form interior term alone) behind the common
 // front of diff/method.h.
 #include "diff/budget.h"
 #include "diff/method.h"
@@ -16,15 +16,18 @@ namespace {
 using Type = MethodOption::Type;
 
 const MethodOption FirstVertexOption{
-    "first-vertex", Type::String,
-    "parameterization of the vertex the camera sees: image (fixed camera rays; needs a static camera), material "
+    "first-vertex",
+    Type::String,
+    "parameterization of the vertex the camera sees: image (fixed camera rays; needs a static camera), "
+    "material "
     "(material points; the filter and pixel edges move) or auto (image unless the camera moves or a moving "
     "surface has a checkerboard/nearest texture)",
     {"auto", "image", "material"}};
-const MethodOption NoAntitheticOption{"no-antithetic", Type::Bool, "disable pixel-level antithetic sampling", {}};
+const MethodOption NoAntitheticOption{
+    "no-antithetic", Type::Bool, "disable pixel-level antithetic sampling", {}};
 
 class PsdrMethod final : public DerivativeMethod {
-public:
+  public:
     PsdrMethod(const MethodOptions& o, bool boundary) : boundary_(boundary) {
         first_vertex_ = parse_first_vertex(o.get_string("first-vertex", "auto"));
         antithetic_ = !o.get_bool("no-antithetic", false);
@@ -70,11 +73,12 @@ public:
         return out;
     }
 
-private:
+  private:
     // The options of one run: the interior gets run.spp and the boundary terms the given budgets, or (psdr
     // without given budgets) run.spp is the total, split by a calibration pass whose split is kept while the
     // sensor, its film, the parameter dimension and spp stay the same. `adjoint` null: forward mode.
-    PsdrOptions options(const Scene& scene, const Parameters& params, const MethodRun& run, const Image* adjoint) {
+    PsdrOptions options(const Scene& scene, const Parameters& params, const MethodRun& run,
+                        const Image* adjoint) {
         const int batches = adjoint ? 1 : run.batches;
         PsdrOptions o;
         o.interior.batches = batches;
@@ -96,13 +100,20 @@ private:
             return o;
         }
         const Film& film = *scene.sensor->film;
-        const Key key{adjoint != nullptr, scene.sensor.get(), film.width, film.height, params.dimension(), run.spp, batches};
+        const Key key{adjoint != nullptr,
+                      scene.sensor.get(),
+                      film.width,
+                      film.height,
+                      params.dimension(),
+                      run.spp,
+                      batches};
         if (!calibrated_ || !(calibrated_key_ == key)) {
             if (run.verbose) std::fprintf(stderr, "calibrating the terms' budgets...\n");
             calibrated_ = adjoint ? psdr_gradient_budget(scene, params, *adjoint, o, run.spp)
                                   : psdr_budget(scene, params, o, run.spp);
             calibrated_key_ = key;
-            if (run.verbose) std::fprintf(stderr, "budget: %s (calibrated)\n", describe_budget(*calibrated_).c_str());
+            if (run.verbose)
+                std::fprintf(stderr, "budget: %s (calibrated)\n", describe_budget(*calibrated_).c_str());
         }
         PsdrOptions c = *calibrated_;
         c.interior.seed = run.seed;
@@ -111,19 +122,22 @@ private:
     }
 
     std::string describe(const Scene& scene, const Parameters& params, const PsdrOptions& o) const {
-        const std::string vertex =
-            image_space_first_vertex(scene, params, o.interior.first_vertex) ? "image-space" : "material-form";
+        const std::string vertex = image_space_first_vertex(scene, params, o.interior.first_vertex)
+                                       ? "image-space"
+                                       : "material-form";
         if (!boundary_) return "interior term, " + vertex + " first vertex";
         return "interior + boundary terms (" + describe_budget(o) + (manual_ ? ")" : ", calibrated)");
     }
 
     static void print_costs(const PsdrDerivative& d) {
-        std::fprintf(stderr, "%-9s %12s %10s %12s %9s\n", "term", "samples", "rays/smp", "tape/smp", "seconds");
+        std::fprintf(stderr, "%-9s %12s %10s %12s %9s\n", "term", "samples", "rays/smp", "tape/smp",
+                     "seconds");
         for (size_t k = 0; k < d.cost.size(); ++k) {
             const SampleCost& t = d.cost[k];
             if (t.samples == 0) continue;
-            std::fprintf(stderr, "%-9s %12llu %10.2f %12.1f %9.2f\n", PsdrTermNames[k], (unsigned long long)t.samples,
-                         double(t.rays) / double(t.samples), double(t.tape_nodes) / double(t.samples), d.seconds[k]);
+            std::fprintf(stderr, "%-9s %12llu %10.2f %12.1f %9.2f\n", PsdrTermNames[k],
+                         (unsigned long long)t.samples, double(t.rays) / double(t.samples),
+                         double(t.tape_nodes) / double(t.samples), d.seconds[k]);
         }
     }
 
@@ -149,7 +163,8 @@ private:
 
 MethodInfo interior_method_info() {
     return {"interior",
-            "the material-form interior term alone (paper 001 Eq. 19, first term): exact for parameters that move "
+            "the material-form interior term alone (paper 001 Eq. 19, first term): exact for parameters that "
+            "move "
             "no visibility edge",
             {FirstVertexOption, NoAntitheticOption},
             [](const MethodOptions& o) { return std::make_unique<PsdrMethod>(o, false); }};
@@ -157,20 +172,31 @@ MethodInfo interior_method_info() {
 
 MethodInfo psdr_method_info() {
     const auto spp_option = [](const std::string& term) {
-        return MethodOption{term + "-spp", Type::Int,
-                            "samples per pixel of the " + term +
-                                " boundary term (experts; by default --spp is a total budget that a calibration "
-                                "pass splits over the terms)",
-                            {}, 0.0};
+        return MethodOption{
+            term + "-spp",
+            Type::Int,
+            "samples per pixel of the " + term +
+                " boundary term (experts; by default --spp is a total budget that a calibration "
+                "pass splits over the terms)",
+            {},
+            0.0};
     };
     MethodOption boundary = spp_option("boundary");
     boundary.help = "samples per pixel of each boundary term (experts; default: calibrated split of --spp)";
     return {"psdr",
             "interior + boundary terms of paper 001 (primary, direct, indirect, pixel), the budget split by "
             "measurement",
-            {FirstVertexOption, NoAntitheticOption, boundary, spp_option("primary"), spp_option("direct"),
-             spp_option("indirect"), spp_option("pixel"),
-             {"no-guiding", Type::Bool, "sample the primary term's edges by projected length only (no contrast pilot)", {}}},
+            {FirstVertexOption,
+             NoAntitheticOption,
+             boundary,
+             spp_option("primary"),
+             spp_option("direct"),
+             spp_option("indirect"),
+             spp_option("pixel"),
+             {"no-guiding",
+              Type::Bool,
+              "sample the primary term's edges by projected length only (no contrast pilot)",
+              {}}},
             [](const MethodOptions& o) { return std::make_unique<PsdrMethod>(o, true); }};
 }
 

@@ -180,14 +180,19 @@ OptimizeConfig parse_optimize_config(const json& j, const std::string& base_dir,
         for (const std::string term : {"primary", "direct", "indirect"})
             c.method_options.set(term + "-spp", std::to_string(root.integer(term + "_spp", 4, 0)));
     if (const nlohmann::json* options = root.find("options", false)) {
-        if (!options->is_object()) throw Error(source + ": key 'options' must be an object (option name → value)");
+        if (!options->is_object())
+            throw Error(source + ": key 'options' must be an object (option name → value)");
         for (const auto& [key, value] : options->items()) {
             std::string name = key;
             std::replace(name.begin(), name.end(), '_', '-');
-            if (value.is_string()) c.method_options.set(name, value.get<std::string>());
-            else if (value.is_boolean()) c.method_options.set(name, value.get<bool>() ? "true" : "false");
-            else if (value.is_number()) c.method_options.set(name, value.dump());
-            else throw Error(source + ": key 'options." + key + "' must be a string, number or boolean");
+            if (value.is_string())
+                c.method_options.set(name, value.get<std::string>());
+            else if (value.is_boolean())
+                c.method_options.set(name, value.get<bool>() ? "true" : "false");
+            else if (value.is_number())
+                c.method_options.set(name, value.dump());
+            else
+                throw Error(source + ": key 'options." + key + "' must be a string, number or boolean");
         }
     }
     c.loss = parse_loss_kind(root.string("loss", "l2"));
@@ -357,7 +362,8 @@ OptimizeResult optimize(const OptimizeConfig& config,
     result.method = config.method != "auto" ? config.method : problem.geometric() ? "psdr" : "interior";
     // Method auto without a pose: the interior term alone (psdr's budget keys, if given, do not apply).
     const std::unique_ptr<DerivativeMethod> method = make_method(
-        result.method, config.method == "auto" && result.method == "interior" ? MethodOptions() : config.method_options);
+        result.method,
+        config.method == "auto" && result.method == "interior" ? MethodOptions() : config.method_options);
 
     // Truth and initial values, in the problem's layout (poses: 0 = the scene's pose).
     std::vector<double> truth = problem.scene_values(), x = truth;

@@ -28,11 +28,11 @@
 //   loss            string     "l2" (default) | "rel_l2"
 //   iterations      int        number of Adam steps
 //   spp             int        samples per pixel of the primal image of each iteration
-//   gradient_spp    int        samples per pixel of the gradient (see primary_spp), independent of the primal's
-//   seed            int        base seed (default 0)
-//   output          string     output directory (default "optimize_out"), relative to the working directory
-//   snapshot_every  int        write iter_NNNN.png every N iterations (0 = never; default 10)
-//   lr_decay        number     learning-rate factor reached at the last iteration, decayed exponentially
+//   gradient_spp    int        samples per pixel of the gradient (see primary_spp), independent of the
+//   primal's seed            int        base seed (default 0) output          string     output directory
+//   (default "optimize_out"), relative to the working directory snapshot_every  int        write
+//   iter_NNNN.png every N iterations (0 = never; default 10) lr_decay        number     learning-rate factor
+//   reached at the last iteration, decayed exponentially
 //                              (default 1: constant rates)
 //   threads         int        worker threads (0 = all; default 0)
 #pragma once

@@ -1,7 +1,7 @@
 #include "core/interrupt.h"
+#include "core/stratified.h"
 #include "render/integrator.h"
 #include "render/tiles.h"
-#include "core/stratified.h"
 
 #include <chrono>
 

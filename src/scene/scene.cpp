@@ -85,7 +85,8 @@ void Scene::select_sensor(const std::string& which) {
             sensor = sensors[i];
             return;
         }
-        names += (i ? ", " : "") + std::to_string(i) + (sensors[i]->id.empty() ? "" : " (" + sensors[i]->id + ")");
+        names +=
+            (i ? ", " : "") + std::to_string(i) + (sensors[i]->id.empty() ? "" : " (" + sensors[i]->id + ")");
     }
     throw Error("unknown sensor '" + which + "' (the scene's sensors: " + names + ")");
 }

@@ -25,8 +25,8 @@ public:
     std::vector<std::shared_ptr<Shape>> shapes;
     std::vector<std::shared_ptr<Instance>> instances; // placements of shapegroups (their meshes stored once)
     std::vector<std::shared_ptr<Emitter>> emitters; // all emitters, area emitters included
-    std::shared_ptr<Sensor> sensor;                // the sensor rendered: sensors[0] unless selected
-    std::vector<std::shared_ptr<Sensor>> sensors;  // every sensor, in declaration order (Mitsuba's sensors())
+    std::shared_ptr<Sensor> sensor;                 // the sensor rendered: sensors[0] unless selected
+    std::vector<std::shared_ptr<Sensor>> sensors; // every sensor, in declaration order (Mitsuba's sensors())
     std::shared_ptr<Integrator> integrator;
     // Every object with an `id`, for parameter lookup and `info`.
     std::map<std::string, std::shared_ptr<Object>> named_objects;
