@@ -1,9 +1,9 @@
 // Shared pieces of the `penumbra` command line. Each command family registers itself on the CLI11 app.
 #pragma once
+#include "core/progress.h"
+
 #include <CLI/CLI.hpp>
 
-#include <chrono>
-#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -24,20 +24,7 @@ void write_signed(const std::string& path, const Image& image, float scale = 0.f
 // Either standard-error image may be empty.
 void write_z_map(const std::string& path, const Image& a, const Image& b, const Image& sa, const Image& sb);
 
-// A progress bar on stderr, redrawn at most every 100 ms, only when stderr is a terminal.
-class ProgressBar {
-public:
-    explicit ProgressBar(bool enabled, std::string label = "");
-    void update(float fraction);
-    std::function<void(float)> callback() {
-        return [this](float f) { update(f); };
-    }
-
-private:
-    bool enabled_;
-    std::string label_;
-    std::chrono::steady_clock::time_point start_, last_;
-};
+using penumbra::ProgressBar;
 
 void add_render_commands(CLI::App& app);   // render, info
 void add_diff_commands(CLI::App& app);     // params, derivative, gradient, fd, compare

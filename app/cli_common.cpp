@@ -4,8 +4,6 @@
 #include "core/error.h"
 #include "core/image.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -44,24 +42,6 @@ void write_z_map(const std::string& path, const Image& a, const Image& b, const 
             z.pixels[i][k] = s > 0.f ? std::clamp(d / s, -4.f, 4.f) : (d == 0.f ? 0.f : std::copysign(4.f, d));
         }
     write_signed(path, z, 4.f);
-}
-
-ProgressBar::ProgressBar(bool enabled, std::string label)
-    : enabled_(enabled && isatty(STDERR_FILENO)), label_(std::move(label)), start_(std::chrono::steady_clock::now()) {}
-
-void ProgressBar::update(float fraction) {
-    if (!enabled_) return;
-    const auto now = std::chrono::steady_clock::now();
-    if (fraction < 1.f && now - last_ < std::chrono::milliseconds(100)) return;
-    last_ = now;
-    const int width = 40, filled = int(fraction * width);
-    const double elapsed = std::chrono::duration<double>(now - start_).count();
-    std::string bar(size_t(std::max(0, filled)), '=');
-    bar.resize(width, ' ');
-    std::fprintf(stderr, "\r%s[%s] %5.1f%%  %.1fs", label_.empty() ? "" : (label_ + " ").c_str(), bar.c_str(),
-                 100.0 * fraction, elapsed);
-    if (fraction >= 1.f) std::fprintf(stderr, "\n");
-    std::fflush(stderr);
 }
 
 } // namespace penumbra::cli

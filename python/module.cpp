@@ -4,6 +4,7 @@
 // is released while rendering and Ctrl-C interrupts the work (core/interrupt.h); errors arrive as
 // penumbra.Error with penumbra's message (file:line for scene files).
 #include "core/interrupt.h"
+#include "core/progress.h"
 #include "diff/method.h"
 #include "diff/parameter_table.h"
 #include "render/render.h"
@@ -217,26 +218,31 @@ PYBIND11_MODULE(_penumbra, m) {
              })
         .def(
             "render",
-            [](PyScene& s, int spp, uint64_t seed, int threads, int sensor) {
+            [](PyScene& s, int spp, uint64_t seed, int threads, int sensor, bool progress) {
                 std::lock_guard<std::mutex> lock(s.mutex);
+                ProgressBar bar(progress, "render");
                 return to_array(run_interruptible<Image>([&] {
                     SensorScope scope(*s.scene, sensor);
                     RenderOptions o;
                     o.spp = spp;
                     o.seed = seed;
                     o.threads = threads;
+                    o.progress = bar.callback();
                     return render(*s.scene, o);
                 }));
             },
-            py::arg("spp"), py::arg("seed"), py::arg("threads"), py::arg("sensor"))
+            py::arg("spp"), py::arg("seed"), py::arg("threads"), py::arg("sensor"), py::arg("progress"))
         .def("gradient",
              [](PyScene& s, const std::vector<int>& entries,
                 const py::array_t<float, py::array::c_style | py::array::forcecast>& adjoint, int spp,
-                uint64_t seed, int threads, int sensor, const std::string& method, const py::dict& options) {
+                uint64_t seed, int threads, int sensor, const std::string& method, const py::dict& options,
+                bool progress) {
                  std::lock_guard<std::mutex> lock(s.mutex);
                  check_sensor_motions(s, entries, sensor);
                  DerivativeMethod& dm = method_for(s, method, options);
-                 const MethodRun run = run_settings(spp, seed, threads, 1);
+                 ProgressBar bar(progress, "gradient");
+                 MethodRun run = run_settings(spp, seed, threads, 1);
+                 run.progress = bar.callback();
                  SensorScope scope(*s.scene, sensor);
                  const Film& film = *s.scene->sensor->film;
                  const Image a = from_array(adjoint, film.width, film.height, "adjoint image");
@@ -255,14 +261,16 @@ PYBIND11_MODULE(_penumbra, m) {
              })
         .def("derivative", [](PyScene& s, const std::vector<std::pair<int, std::vector<float>>>& directions,
                               int spp, uint64_t seed, int threads, int sensor, int batches,
-                              const std::string& method, const py::dict& options) {
+                              const std::string& method, const py::dict& options, bool progress) {
             std::lock_guard<std::mutex> lock(s.mutex);
             std::vector<int> entries;
             for (const auto& d : directions)
                 entries.push_back(d.first);
             check_sensor_motions(s, entries, sensor);
             DerivativeMethod& dm = method_for(s, method, options);
-            const MethodRun run = run_settings(spp, seed, threads, batches);
+            ProgressBar bar(progress, "derivative");
+            MethodRun run = run_settings(spp, seed, threads, batches);
+            run.progress = bar.callback();
             SensorScope scope(*s.scene, sensor);
             MethodDerivative d = run_interruptible<MethodDerivative>([&] {
                 s.table->select(directions);

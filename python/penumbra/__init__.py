@@ -61,6 +61,7 @@ class Scene:
         self._native = native
         self._entries = OrderedDict((e[0], (tuple(e[1]), e[2], e[3])) for e in native.entries())
         self._version = 0  # bumped whenever values are written into the scene
+        self._written = {}  # entry index -> the values last written
 
     def sensors(self):
         """[(id, width, height)] of every sensor, in declaration order (render(sensor=) takes an index or id)."""
@@ -95,9 +96,16 @@ class Scene:
     def _write(self, values):
         """Stages {name: tensor} and applies them (one BVH rebuild at most)."""
         checked = [(self._index(name), _as_values(name, value, self._shape(name))) for name, value in values.items()]
-        for index, array in checked:
+        # Values equal to those last written are skipped: a geometric change rebuilds the BVH, so rendering several
+        # views of the same parameters must not pay for it once per view.
+        changed = [(i, a) for i, a in checked if i not in self._written or not np.array_equal(self._written[i], a)]
+        if not changed:
+            return
+        for index, array in changed:
             self._native.set(index, array)
         self._native.apply()
+        for index, array in changed:
+            self._written[index] = array.copy()
         self._version += 1
 
     def _sensor_index(self, sensor):
@@ -215,7 +223,8 @@ class _Render(torch.autograd.Function):
         ctx.scene, ctx.names, ctx.config = scene, names, config
         ctx.version = scene._version
         ctx.values = [t.detach().clone() for t in tensors]
-        image = scene._native.render(config["spp"], config["seed"], config["threads"], config["sensor"])
+        image = scene._native.render(config["spp"], config["seed"], config["threads"], config["sensor"],
+                                     config["progress"])
         return torch.from_numpy(image)
 
     @staticmethod
@@ -229,7 +238,7 @@ class _Render(torch.autograd.Function):
             adjoint = grad_image.detach().to(torch.float32).contiguous().numpy()
             values = scene._native.gradient([scene._index(ctx.names[i]) for i in wanted], adjoint, config["spp"],
                                             config["seed_grad"], config["threads"], config["sensor"],
-                                            config["method"], config["options"])
+                                            config["method"], config["options"], config["progress"])
             for i, g in zip(wanted, values):
                 grads[i] = torch.from_numpy(g).reshape(ctx.values[i].shape)
         return (None, None, None, *grads)
@@ -244,27 +253,29 @@ def _spp(spp, scene, sensor):
     return int(spp)
 
 
-def render(scene, params=None, spp=None, seed=0, seed_grad=None, method="psdr", sensor=0, threads=None, **options):
+def render(scene, params=None, spp=None, seed=0, seed_grad=None, method="psdr", sensor=0, threads=None,
+           progress=False, **options):
     """Renders `scene` (sensor index or id) and returns an H x W x 3 float32 tensor.
 
     params: a mapping name -> tensor (scene.params() or a dict of some parameters); their values are written
     into the scene first, and the image is differentiable with respect to those that require grad: its
     backward runs penumbra's reverse mode with method `method` (psdr, interior, paths, ...; options as keyword
     arguments, e.g. primary_spp=8) and `spp` samples per pixel, seeded by seed_grad (default: derived from seed,
-    so the gradient's samples are independent of the image's)."""
+    so the gradient's samples are independent of the image's). progress=True draws a progress bar on stderr
+    (when it is a terminal) for the render and its backward."""
     if not isinstance(scene, Scene):
         raise TypeError("render: expected a penumbra.Scene, got %s" % type(scene).__name__)
     _penumbra_method_check(method, options)
     names, tensors = _prepare(scene, params)
     sensor = scene._sensor_index(sensor)
     config = {"spp": _spp(spp, scene, sensor), "seed": int(seed), "threads": _threads if threads is None else int(threads),
-              "sensor": sensor, "method": method, "options": dict(options),
+              "sensor": sensor, "method": method, "options": dict(options), "progress": bool(progress),
               "seed_grad": int(seed) * 2 + 1 if seed_grad is None else int(seed_grad)}
     return _Render.apply(scene, names, config, *tensors)
 
 
 def forward_derivative(scene, direction, params=None, spp=None, seed=0, method="psdr", sensor=0, threads=None,
-                       batches=1, return_stderr=False, **options):
+                       batches=1, return_stderr=False, progress=False, **options):
     """Forward mode: the image derivative dI/dθ along `direction` (a mapping name -> tensor of each parameter's
     shape), at the values of `params` (if given). With batches > 1 and return_stderr, also the per-pixel
     standard error."""
@@ -276,7 +287,7 @@ def forward_derivative(scene, direction, params=None, spp=None, seed=0, method="
     sensor = scene._sensor_index(sensor)
     image, stderr = scene._native.derivative(dirs, _spp(spp, scene, sensor), int(seed),
                                              _threads if threads is None else int(threads), sensor, int(batches),
-                                             method, dict(options))
+                                             method, dict(options), bool(progress))
     image = torch.from_numpy(image)
     if return_stderr:
         return image, (torch.from_numpy(stderr) if stderr is not None else None)
