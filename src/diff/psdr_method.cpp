@@ -7,7 +7,9 @@
 
 #include <chrono>
 #include <cstdio>
-#include <optional>
+#include <algorithm>
+#include <utility>
+#include <vector>
 
 namespace penumbra {
 
@@ -107,15 +109,16 @@ class PsdrMethod final : public DerivativeMethod {
                       params.dimension(),
                       run.spp,
                       batches};
-        if (!calibrated_ || !(calibrated_key_ == key)) {
+        auto it = std::find_if(calibrated_.begin(), calibrated_.end(), [&](const auto& k) { return k.first == key; });
+        if (it == calibrated_.end()) {
             if (run.verbose) std::fprintf(stderr, "calibrating the terms' budgets...\n");
-            calibrated_ = adjoint ? psdr_gradient_budget(scene, params, *adjoint, o, run.spp)
-                                  : psdr_budget(scene, params, o, run.spp);
-            calibrated_key_ = key;
+            calibrated_.emplace_back(key, adjoint ? psdr_gradient_budget(scene, params, *adjoint, o, run.spp)
+                                                  : psdr_budget(scene, params, o, run.spp));
+            it = calibrated_.end() - 1;
             if (run.verbose)
-                std::fprintf(stderr, "budget: %s (calibrated)\n", describe_budget(*calibrated_).c_str());
+                std::fprintf(stderr, "budget: %s (calibrated)\n", describe_budget(it->second).c_str());
         }
-        PsdrOptions c = *calibrated_;
+        PsdrOptions c = it->second;
         c.interior.seed = run.seed;
         c.interior.threads = run.threads;
         return c;
@@ -155,8 +158,7 @@ class PsdrMethod final : public DerivativeMethod {
     FirstVertex first_vertex_;
     bool antithetic_ = true, guiding_ = true, manual_ = false;
     std::array<int, 4> term_spp_{}; // primary, direct, indirect, pixel; -1: unset
-    std::optional<PsdrOptions> calibrated_;
-    Key calibrated_key_{};
+    std::vector<std::pair<Key, PsdrOptions>> calibrated_; // one split per configuration (e.g. per view)
 };
 
 } // namespace
