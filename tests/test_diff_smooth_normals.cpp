@@ -1,6 +1,7 @@
 // vertex_positions of meshes shaded with smooth vertex normals: as in Mitsuba 3 (Mesh::parameters_changed),
 // the normals are recomputed whenever the positions change, and the derivative estimators differentiate them
 // through the positions (diff/material_form.h, MovedVertices::normal).
+#include "diff/psdr.h"
 #include "diff_check.h"
 #include "xml_test_util.h"
 
@@ -60,6 +61,57 @@ std::vector<float> height_field_direction(const Parameter& positions) {
         d[3 * v + 2] = 0.5f * std::cos(Pi * p[0] / 1.6f) * std::cos(Pi * p[1] / 1.6f);
     }
     return d;
+}
+
+// A quad filling the view (its edges out of the film), with vertex normals given in the file that turn its
+// left side away from the camera: the shading terminator, where a diffuse BSDF's cos θ_i > 0 test makes the
+// radiance jump to black, runs down the middle of the image (diff/shading_terminator.h). A constant sky
+// lights it; nothing casts a shadow.
+std::string terminator_scene(const std::string& mesh) {
+    return R"(<scene version="3.0.0">
+      <integrator type="path"><integer name="max_depth" value="2"/></integrator>
+      <sensor type="perspective"><float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0,0,3" target="0,0,0" up="0,1,0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/>
+          <boolean name="sample_border" value="true"/></film></sensor>
+      <shape type="obj" id="quad"><string name="filename" value=")" +
+           mesh + R"("/><bsdf type="diffuse"><rgb name="reflectance" value="0.8,0.6,0.4"/></bsdf></shape>
+      <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
+    </scene>)";
+}
+
+const char* const TiltedQuadObj = "v -3 -3 0\nv 3 -3 0\nv 3 3 0\nv -3 3 0\n"
+                                  "vn -1 0.3 -0.5\nvn 0.3 0 1\nvn 0.3 0 1\nvn -1 -0.3 -0.5\n"
+                                  "f 1//1 2//2 3//3\nf 1//1 3//3 4//4\n";
+
+// psdr (interior + primary term, which samples the terminator) against finite differences; with
+// primary_spp = 0 (the interior term alone) the check must fail.
+void expect_terminator_matches_fd(const std::string& param) {
+    const char* env = std::getenv("PENUMBRA_TEST_SEED");
+    const uint64_t seed = env ? std::strtoull(env, nullptr, 10) : 0;
+    const TempDir dir;
+    auto scene = load_scene_string(terminator_scene(dir.write("quad.obj", TiltedQuadObj)));
+    Parameters params(*scene);
+    params.enable({parse_param_selection(param)});
+    PsdrOptions o;
+    o.interior.spp = 8;
+    o.interior.batches = 16;
+    o.interior.seed = 5 + 1000 * seed;
+    o.interior.path = path_settings(*scene);
+    o.primary_spp = 8;
+    o.direct_spp = o.indirect_spp = o.pixel_spp = 0; // no shadows; the quad's edges are off the film
+    const PsdrDerivative d = psdr_derivative(*scene, params, o);
+    RenderOptions ro;
+    ro.spp = 64;
+    ro.seed = 77 + 1000 * seed;
+    const FiniteDifference fd = finite_difference(*scene, params, 1e-2, ro, 16);
+    const DiffCheck total = check_against(d.total, d.total_stderr, fd.derivative, fd.stderr_img);
+    const DiffCheck interior =
+        check_against(d.interior.derivative, d.interior.stderr_img, fd.derivative, fd.stderr_img);
+    std::printf("  %s: interior+primary %s\n  interior only %s\n", param.c_str(), describe(total).c_str(),
+                describe(interior).c_str());
+    EXPECT_TRUE(total.passes()) << describe(total);
+    EXPECT_FALSE(interior.passes()) << "negative control: the terminator must matter: " << describe(interior);
 }
 
 } // namespace
@@ -128,4 +180,13 @@ TEST(SmoothNormals, HeightfieldVertexPositionsMatchFiniteDifferences) {
     std::printf("  smooth-normal heightfield: %s\n", describe(c).c_str());
     EXPECT_TRUE(c.passes()) << describe(c);
     EXPECT_GT(std::abs(c.comparison.mean_ref), 1e-3) << "the reference derivative is ~0, a weak test";
+}
+
+// The shading terminator moving with the surface: a translation across it and a rotation about the view axis.
+TEST(ShadingTerminator, TranslatedQuadMatchesFiniteDifferences) {
+    expect_terminator_matches_fd("quad.translate=1,0.3,0");
+}
+
+TEST(ShadingTerminator, RotatedQuadMatchesFiniteDifferences) {
+    expect_terminator_matches_fd("quad.rotate=0,0,1");
 }
