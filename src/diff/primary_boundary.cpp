@@ -118,10 +118,9 @@ void find_terminators(const Scene& scene, const Parameters& params, const Vec2f&
             }
             float weight = diagonal;
             if (projected) {
-                const auto outside = [&](auto side) { return side(s[0]) && side(s[1]) && side(s[2]); };
-                if (outside([&](const Vec2f& v) { return v.x < lo.x; }) || outside([&](const Vec2f& v) { return v.x > hi.x; }) ||
-                    outside([&](const Vec2f& v) { return v.y < lo.y; }) || outside([&](const Vec2f& v) { return v.y > hi.y; }))
-                    continue;
+                const float x0 = std::min({s[0].x, s[1].x, s[2].x}), x1 = std::max({s[0].x, s[1].x, s[2].x});
+                const float y0 = std::min({s[0].y, s[1].y, s[2].y}), y1 = std::max({s[0].y, s[1].y, s[2].y});
+                if (x1 < lo.x || x0 > hi.x || y1 < lo.y || y0 > hi.y) continue;
                 const auto length = [&](int a, int b) { return std::hypot(s[a].x - s[b].x, s[a].y - s[b].y); };
                 weight = std::max({length(1, 0), length(2, 1), length(0, 2)});
             }
@@ -190,7 +189,8 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
         out.lengths.push_back(length);
     }
     if (image_space && sensor.projects_points() && !parallel) find_terminators(scene, params, lo, hi, out);
-    if (!out.lengths.empty() || !out.terminators.empty()) out.distribution = DiscreteDistribution(all_weights(out, out.lengths));
+    if (!out.lengths.empty() || !out.terminators.empty())
+        out.distribution = DiscreteDistribution(all_weights(out, out.lengths));
     return result;
 }
 
@@ -345,7 +345,8 @@ BoundarySample sample_terminator(const Scene& scene, const Silhouettes& sil, con
             const SurfaceInteraction3f hit = scene.intersect(probe);
             ++rays.rays;
             seen = hit.is_valid() && hit.shape == tt.shape && std::abs(hit.t - center.t) < 0.02f * center.t;
-            if (seen) L[side] = trace_path<float>(scene, sampler, probe, hit, hit, ReferenceGeometry{}, settings, rays) * weight;
+            if (seen)
+                L[side] = trace_path<float>(scene, sampler, probe, hit, hit, ReferenceGeometry{}, settings, rays) * weight;
         }
         if (!seen) continue;
         // Next to a silhouette the primary term probes its near side probe_offset() inside: where the terminator's
@@ -460,7 +461,8 @@ PrimaryBoundary::~PrimaryBoundary() = default;
 Image PrimaryBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
     const MaterialForm form(scene_, params, options.first_vertex);
     const auto silhouettes = prepare(scene_, edges_, params, form, options);
-    if (silhouettes->edges.empty() && silhouettes->terminators.empty()) return Image(scene_.sensor->film->width, scene_.sensor->film->height);
+    if (silhouettes->edges.empty() && silhouettes->terminators.empty())
+        return Image(scene_.sensor->film->width, scene_.sensor->film->height);
     return boundary_derivative(scene_, params, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
         return sample_boundary(scene_, *silhouettes, form, index, sampler, options.path, rays);
     });
