@@ -337,14 +337,16 @@ BoundarySample sample_terminator(const Scene& scene, const Silhouettes& sil, con
         const SurfaceInteraction3f center = scene.intersect(ray);
         ++rays.rays;
         if (!center.is_valid() || center.shape != tt.shape || center.prim_index != tt.prim) continue;
-        // The radiance on either side, 0.01 pixel off the curve: the same surface at the same depth on both.
+        // The radiance on either side, 0.01 pixel off the curve: the same surface on both, within 10% of the
+        // curve point's depth (the terminator lies next to silhouettes, where the surface is seen at grazing
+        // angles and 0.01 pixel spans a sizeable depth; a tighter bound there dropped ~10% of the term).
         Color3f L[2];
         bool seen = true;
         for (int side = 0; side < 2 && seen; ++side) {
             const auto [probe, weight] = sensor.sample_ray(s + n_s * (side == 0 ? 0.01f : -0.01f), sampler.next_2d());
             const SurfaceInteraction3f hit = scene.intersect(probe);
             ++rays.rays;
-            seen = hit.is_valid() && hit.shape == tt.shape && std::abs(hit.t - center.t) < 0.02f * center.t;
+            seen = hit.is_valid() && hit.shape == tt.shape && std::abs(hit.t - center.t) < 0.1f * center.t;
             if (seen)
                 L[side] = trace_path<float>(scene, sampler, probe, hit, hit, ReferenceGeometry{}, settings, rays) * weight;
         }
@@ -356,7 +358,7 @@ BoundarySample sample_terminator(const Scene& scene, const Silhouettes& sil, con
         const SurfaceInteraction3f dark =
             scene.intersect(sensor.sample_ray(s - n_s * probe_offset(sensor, x, s, n_s), Vec2f(0.5f)).first);
         ++rays.rays;
-        if (!(dark.is_valid() && dark.shape == tt.shape && std::abs(dark.t - center.t) < 0.02f * center.t &&
+        if (!(dark.is_valid() && dark.shape == tt.shape && std::abs(dark.t - center.t) < 0.1f * center.t &&
               dot(dark.sh_frame.n, eye - dark.p) < 0.f))
             continue;
         // G̃ = n_s · (c − x) on the tape, at the fixed ray through s.
