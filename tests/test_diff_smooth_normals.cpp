@@ -272,3 +272,33 @@ TEST(SmoothNormals, IcosphereStretchedTowardAnEllipsoid) {
     std::printf("  icosphere: %s\n", describe(c).c_str());
     EXPECT_TRUE(c.passes()) << describe(c);
 }
+
+// Reverse mode includes the terminator: ⟨a, Jv⟩ of the forward image equals ⟨Jᵀa, v⟩ of the gradient on the
+// same samples (one batch), up to float rounding.
+TEST(ShadingTerminator, ReverseModeMatchesForwardMode) {
+    const TempDir dir;
+    auto scene = load_scene_string(terminator_scene(dir.write("quad.obj", TiltedQuadObj)));
+    Parameters params(*scene);
+    params.enable({parse_param_selection("quad.translate=1,0.3,0")});
+    PsdrOptions o;
+    o.interior.spp = 4;
+    o.interior.seed = 5;
+    o.interior.path = path_settings(*scene);
+    o.primary_spp = 8;
+    o.direct_spp = o.indirect_spp = o.pixel_spp = 0;
+    const PsdrDerivative forward = psdr_derivative(*scene, params, o);
+    Image adjoint(forward.total.width, forward.total.height);
+    PCG32 rng(3);
+    for (auto& a : adjoint.pixels)
+        a = Color3f(rng.next_float(), rng.next_float(), rng.next_float());
+    const Gradient reverse = psdr_gradient(*scene, params, adjoint, o);
+    double lhs = 0, scale = 0, primary = 0;
+    for (size_t i = 0; i < adjoint.pixels.size(); ++i)
+        for (int k = 0; k < 3; ++k) {
+            lhs += double(adjoint.pixels[i][k]) * forward.total.pixels[i][k];
+            scale += std::abs(double(adjoint.pixels[i][k]) * forward.total.pixels[i][k]);
+            primary += std::abs(double(adjoint.pixels[i][k]) * forward.primary.pixels[i][k]);
+        }
+    EXPECT_GT(primary, 0.5 * scale) << "the terminator should carry most of this derivative";
+    EXPECT_NEAR(lhs, reverse.values[0], 1e-4 * scale + 1e-6);
+}
