@@ -88,6 +88,14 @@ std::vector<Shape*> moved_shapes(const Parameter& p, const Scene& scene) {
     return out;
 }
 
+// A mesh with vertex normals whose vertex_positions were written gets them recomputed (Mitsuba 3's
+// Mesh::parameters_changed); rigid motions rotate the normals instead.
+void recompute_moved_normals(const Parameter& p) {
+    if (p.kind == Parameter::Kind::Data && p.geometry && p.shape && !p.shape->face_normals &&
+        !p.shape->mesh.normals.empty())
+        recompute_vertex_normals(p.shape->mesh);
+}
+
 // Copies of moved group shapes follow their group shape's (new) vertices (finalize() follows).
 void update_moved(const std::set<Shape*>& moved) {
     for (Shape* shape : moved)
@@ -293,8 +301,10 @@ void Parameters::displace(Scene& scene, double t) {
     }
     // 2. Data parameters move linearly along their direction.
     for (const auto& [p, index] : enabled_)
-        if (p->kind == Parameter::Kind::Data)
+        if (p->kind == Parameter::Kind::Data) {
             for (int k = 0; k < p->size; ++k) p->data[k] += float(t * direction_[index + k]);
+            recompute_moved_normals(*p);
+        }
     update_moved(moved);
     // 3. Motions, exactly (finite θ = t), on top.
     const float theta = float(t);
@@ -366,6 +376,7 @@ void Parameters::set_values(Scene& scene, const std::vector<float>& values, bool
         for (int k = 0; k < p->size; ++k)
             if (!std::isfinite(values[index + k])) throw Error("set_values: non-finite value for '" + p->name + "'");
         std::copy(values.begin() + index, values.begin() + index + p->size, p->data);
+        recompute_moved_normals(*p);
         for (Shape* shape : moved_shapes(*p, scene))
             moved.insert(shape);
     }

@@ -2,6 +2,7 @@
 
 #include "core/distribution.h"
 #include "diff/material_form.h"
+#include "diff/shading_terminator.h"
 #include "scene/texture.h"
 
 #include <algorithm>
@@ -16,7 +17,8 @@ namespace penumbra {
 // image-space first vertex, creases where the shading jumps (face normals, hard edges, uv seams of textured
 // shapes). Each keeps
 // the part of the edge that lies in front of the camera and projects within the film (plus the filter's
-// reach), with its projection.
+// reach), with its projection. With the image-space first vertex and a perspective camera, also the triangles
+// of moving smooth-normal shapes that the shading terminator crosses (diff/shading_terminator.h).
 struct PrimaryBoundary::Silhouettes {
     struct SilhouetteEdge {
         const Shape* shape;
@@ -27,8 +29,16 @@ struct PrimaryBoundary::Silhouettes {
         float z0, z1;     // their depths along the view direction (perspective-correct interpolation)
     };
     std::vector<SilhouetteEdge> edges;
+    struct TerminatorTriangle {
+        const Shape* shape;
+        uint32_t prim;
+    };
     std::vector<float> lengths;        // of the edges' images
-    DiscreteDistribution distribution; // over edges; points are uniform along an edge's image
+    std::vector<TerminatorTriangle> terminators;
+    std::vector<float> terminator_weights; // the triangles' image sizes (pixels)
+    // Over the edges, then the terminator triangles; points are uniform along an edge's image, and b1 is
+    // uniform in a triangle.
+    DiscreteDistribution distribution;
     bool image_space = false;
 };
 
@@ -77,6 +87,48 @@ bool shading_jumps(const Shape& shape, const Edge& e, bool textured) {
         }
     }
     return false;
+}
+
+// The sampling weights: the edges' (`edge_weights`), then the terminator triangles'.
+std::vector<float> all_weights(const Silhouettes& sil, std::vector<float> edge_weights) {
+    edge_weights.insert(edge_weights.end(), sil.terminator_weights.begin(), sil.terminator_weights.end());
+    return edge_weights;
+}
+
+// The triangles of moving shapes shaded with vertex normals whose shading terminator may be seen, weighted by
+// their image size (the largest distance between their vertices' images; the film's diagonal for a triangle
+// that crosses the camera plane). A triangle whose image lies beyond one side of the film box is left out.
+void find_terminators(const Scene& scene, const Parameters& params, const Vec2f& lo, const Vec2f& hi,
+                      Silhouettes& out) {
+    const Sensor& sensor = *scene.sensor;
+    const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
+    const Vec3f forward = normalize(sensor.to_world.apply_vector(Vec3f(0.f, 0.f, 1.f)));
+    const float diagonal = std::hypot(hi.x - lo.x, hi.y - lo.y);
+    for (const auto& shape : scene.shapes) {
+        const TriangleMesh& m = shape->mesh;
+        if (!params.moves(*shape) || shape->face_normals || m.normals.empty()) continue;
+        for (uint32_t f = 0; f < m.face_count(); ++f) {
+            if (!crosses_shading_terminator(m, f, eye)) continue;
+            Vec2f s[3];
+            bool projected = true;
+            for (int k = 0; k < 3; ++k) {
+                float j;
+                const Vec3f p = m.positions[m.indices[3 * size_t(f) + k]];
+                projected &= dot(p - eye, forward) > 0.f && sensor.film_position(p, forward, s[k], j);
+            }
+            float weight = diagonal;
+            if (projected) {
+                const float x0 = std::min({s[0].x, s[1].x, s[2].x}), x1 = std::max({s[0].x, s[1].x, s[2].x});
+                const float y0 = std::min({s[0].y, s[1].y, s[2].y}), y1 = std::max({s[0].y, s[1].y, s[2].y});
+                if (x1 < lo.x || x0 > hi.x || y1 < lo.y || y0 > hi.y) continue;
+                const auto length = [&](int a, int b) { return std::hypot(s[a].x - s[b].x, s[a].y - s[b].y); };
+                weight = std::max({length(1, 0), length(2, 1), length(0, 2)});
+            }
+            if (!(weight > 0.f) || !std::isfinite(weight)) continue;
+            out.terminators.push_back({shape.get(), f});
+            out.terminator_weights.push_back(weight);
+        }
+    }
 }
 
 std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdges& edges, const Parameters& params,
@@ -136,7 +188,9 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
         out.edges.push_back(kept);
         out.lengths.push_back(length);
     }
-    if (!out.lengths.empty()) out.distribution = DiscreteDistribution(out.lengths);
+    if (image_space && sensor.projects_points() && !parallel) find_terminators(scene, params, lo, hi, out);
+    if (!out.lengths.empty() || !out.terminators.empty())
+        out.distribution = DiscreteDistribution(all_weights(out, out.lengths));
     return result;
 }
 
@@ -165,6 +219,17 @@ struct EdgeCrossing {
     Color3f weight[2];
 };
 
+// The probes' distance (pixels) from a discontinuity's image at s, seen at world point x, in image direction n
+// (see cross_edge).
+float probe_offset(const Sensor& sensor, const Vec3f& x, const Vec2f& s, const Vec2f& n) {
+    const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
+    const float clearance = 2.f * RayEpsilon * (1.f + max_component(abs(eye)) + norm(x - eye));
+    const Ray center = sensor.sample_ray(s, Vec2f(0.5f)).first, side = sensor.sample_ray(s + n, Vec2f(0.5f)).first;
+    const float depth = norm(x - center.o);
+    const float world_per_pixel = norm(side.o + side.d * depth - (center.o + center.d * depth));
+    return std::clamp(clearance / world_per_pixel, 1e-3f, 0.05f);
+}
+
 EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& se, float t, Sampler& sampler,
                         RayCounter& rays) {
     EdgeCrossing out;
@@ -184,12 +249,7 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
     // (which bounds the offset of any point behind the edge as seen at the edge's depth), clamped to
     // [1e-3, 0.05] pixels so that the radiances and velocities stay the limits at the edge up to a small
     // fraction of a pixel.
-    const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
-    const float clearance = 2.f * RayEpsilon * (1.f + max_component(abs(eye)) + norm(x_edge - eye));
-    const Ray center = sensor.sample_ray(out.s, Vec2f(0.5f)).first, side = sensor.sample_ray(out.s + n2, Vec2f(0.5f)).first;
-    const float depth = norm(x_edge - center.o);
-    const float world_per_pixel = norm(side.o + side.d * depth - (center.o + center.d * depth));
-    const float eps = std::clamp(clearance / world_per_pixel, 1e-3f, 0.05f); // pixels
+    const float eps = probe_offset(sensor, x_edge, out.s, n2);
     Side sides[2];
     for (int k = 0; k < 2; ++k) {
         std::tie(out.ray[k], out.weight[k]) = sensor.sample_ray(out.s + n2 * (k == 0 ? eps : -eps), sampler.next_2d());
@@ -230,6 +290,87 @@ Color3f jump(const Scene& scene, const EdgeCrossing& c, bool image_space, const 
     return trace_path<float>(scene, sampler, c.ray[0], c.hit[0], c.hit[0], ReferenceGeometry{}, settings, rays) * c.weight[0] - L_2;
 }
 
+// One sample of the shading terminator of a triangle (diff/shading_terminator.h; the image-space first vertex):
+// the curve's points on a line b_k = u of a sweep k (diff/shading_terminator.h), and by the coarea formula
+//   ∫_C ΔL v_n dl = ∫ du Σ_points ΔL ∂θG̃ |det ds/db| / |∂G̃/∂w|,   v_n = ∂θG̃ / |∇_s G̃|,
+// with ΔL = L(G̃ > 0) − L(G̃ < 0) probed on either side of the curve's image, |det ds/db| = |ds/dA| |e1 × e2|,
+// and ∂θG̃ on the tape at the point where the fixed camera ray through s meets the moving triangle.
+BoundarySample sample_terminator(const Scene& scene, const Silhouettes& sil, const MaterialForm& form, size_t e,
+                                 float u, Sampler& sampler, const PathSettings& settings, RayCounter& rays) {
+    BoundarySample out;
+    const Sensor& sensor = *scene.sensor;
+    const Silhouettes::TerminatorTriangle& tt = sil.terminators[e - sil.edges.size()];
+    const float inv_pdf = 1.f / sil.distribution.pmf(e);
+    const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
+    const TriangleMesh& m = tt.shape->mesh;
+    const uint32_t* i = &m.indices[3 * size_t(tt.prim)];
+    const Vec3f p0 = m.positions[i[0]], e1 = m.positions[i[1]] - p0, e2 = m.positions[i[2]] - p0;
+    const Vec3f ng = cross(e1, e2);
+    // One of the three sweeps at random (u's leading digit in base 3); with the balance heuristic over them, the
+    // point's weight 1 / |∂G̃/∂w| becomes 3 / Σ_sweeps |∂G̃/∂w|, bounded where the curve runs along one sweep's
+    // lines.
+    const int sweep = std::min(int(u * 3.f), 2);
+    TerminatorPoint points[2];
+    const int n = shading_terminator_points(m, tt.prim, eye, sweep, u * 3.f - float(sweep), points);
+    for (int k = 0; k < n; ++k) {
+        const TerminatorPoint& q = points[k];
+        const Vec3f x = p0 + e1 * q.bary.x + e2 * q.bary.y;
+        Vec2f s;
+        float j;
+        const float sweeps = std::abs(q.dG_db1) + std::abs(q.dG_db2) + std::abs(q.dG_db1 - q.dG_db2);
+        if (!sensor.film_position(x, normalize(ng), s, j) || !(sweeps > 0.f)) continue;
+        const float ds_dA = j;
+        // The curve's image tangent (the image of its 3D tangent) and the image normal toward G̃ > 0 (the image of
+        // a 3D step along which G̃ grows), from images of small steps.
+        const float step = 1e-3f * (norm(e1) + norm(e2));
+        const Vec3f tangent = e1 * -q.dG_db2 + e2 * q.dG_db1, up = e1 * q.dG_db1 + e2 * q.dG_db2;
+        Vec2f s_t, s_u;
+        if (!sensor.film_position(x + tangent * (step / norm(tangent)), ng, s_t, j) ||
+            !sensor.film_position(x + up * (step / norm(up)), ng, s_u, j))
+            continue;
+        const Vec2f d_t = s_t - s;
+        Vec2f n_s = Vec2f(-d_t.y, d_t.x) / std::sqrt(d_t.x * d_t.x + d_t.y * d_t.y);
+        if (n_s.x * (s_u.x - s.x) + n_s.y * (s_u.y - s.y) < 0.f) n_s = n_s * -1.f;
+        // The curve point must be what the camera sees (a terminator on the far side of a solid lies within a few
+        // percent of the near side's depth next to its silhouette): the ray through s meets this triangle first.
+        const Ray ray = sensor.sample_ray(s, Vec2f(0.5f)).first;
+        const SurfaceInteraction3f center = scene.intersect(ray);
+        ++rays.rays;
+        if (!center.is_valid() || center.shape != tt.shape || center.prim_index != tt.prim) continue;
+        // The radiance on either side, 0.01 pixel off the curve: the same surface on both, within 10% of the
+        // curve point's depth (the terminator lies next to silhouettes, where the surface is seen at grazing
+        // angles and 0.01 pixel spans a sizeable depth; a tighter bound there dropped ~10% of the term).
+        Color3f L[2];
+        bool seen = true;
+        for (int side = 0; side < 2 && seen; ++side) {
+            const auto [probe, weight] = sensor.sample_ray(s + n_s * (side == 0 ? 0.01f : -0.01f), sampler.next_2d());
+            const SurfaceInteraction3f hit = scene.intersect(probe);
+            ++rays.rays;
+            seen = hit.is_valid() && hit.shape == tt.shape && std::abs(hit.t - center.t) < 0.1f * center.t;
+            if (seen)
+                L[side] = trace_path<float>(scene, sampler, probe, hit, hit, ReferenceGeometry{}, settings, rays) * weight;
+        }
+        if (!seen) continue;
+        // Next to a silhouette the primary term probes its near side probe_offset() inside: where the terminator's
+        // dark side is narrower than that, the silhouette's jump already counts the strip as lit, and the curve
+        // is left to it (a dark strip of that width between two terminator branches moves as one, its two
+        // curves' terms cancelling).
+        const SurfaceInteraction3f dark =
+            scene.intersect(sensor.sample_ray(s - n_s * probe_offset(sensor, x, s, n_s), Vec2f(0.5f)).first);
+        ++rays.rays;
+        if (!(dark.is_valid() && dark.shape == tt.shape && std::abs(dark.t - center.t) < 0.1f * center.t &&
+              dot(dark.sh_frame.n, eye - dark.p) < 0.f))
+            continue;
+        // G̃ = n_s · (c − x) on the tape, at the fixed ray through s.
+        const SurfaceInteraction3f hit =
+            tt.shape->compute_surface_interaction(ray, norm(x - ray.o), tt.prim, q.bary.x, q.bary.y);
+        const SurfaceInteraction<Var> v = form.ray_vertex(hit, ray);
+        const Var G = dot(v.sh_frame.n, Vec3<Var>(eye) - v.p);
+        out.add_splat(s, (L[0] - L[1]) * (ds_dA * norm(ng) * 3.f / sweeps * inv_pdf), G);
+    }
+    return out;
+}
+
 // One boundary sample: a point s on an edge's image, the jump there, and the normal velocity of the
 // discontinuity as a tape expression (its value is ~0, its derivative the velocity):
 //   image-space first vertex: (L_1 − L_2) ((s_edge(θ) − s) · n);
@@ -241,6 +382,7 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
     const Sensor& sensor = *scene.sensor;
     float t = index.stratified(sampler);
     const size_t e = sil.distribution.sample(t);
+    if (e >= sil.edges.size()) return sample_terminator(scene, sil, form, e, t, sampler, settings, rays);
     const Silhouettes::SilhouetteEdge& se = sil.edges[e];
     const EdgeCrossing c = cross_edge(scene, se, t, sampler, rays);
     if (!c.valid) return out;
@@ -302,7 +444,7 @@ void guide(const Scene& scene, Silhouettes& sil, const BoundaryOptions& options)
     const double mean = weighted / length;
     std::vector<float> weights(n);
     for (size_t e = 0; e < n; ++e) weights[e] = float(sil.lengths[e] * (0.5 + 0.5 * rms[e] / mean));
-    sil.distribution = DiscreteDistribution(weights);
+    sil.distribution = DiscreteDistribution(all_weights(sil, weights));
 }
 
 // The edges seen by the camera, with their sampling density.
@@ -321,7 +463,8 @@ PrimaryBoundary::~PrimaryBoundary() = default;
 Image PrimaryBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
     const MaterialForm form(scene_, params, options.first_vertex);
     const auto silhouettes = prepare(scene_, edges_, params, form, options);
-    if (silhouettes->edges.empty()) return Image(scene_.sensor->film->width, scene_.sensor->film->height);
+    if (silhouettes->edges.empty() && silhouettes->terminators.empty())
+        return Image(scene_.sensor->film->width, scene_.sensor->film->height);
     return boundary_derivative(scene_, params, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
         return sample_boundary(scene_, *silhouettes, form, index, sampler, options.path, rays);
     });
@@ -331,7 +474,7 @@ void PrimaryBoundary::gradient(const Parameters& params, const Image& adjoint, c
                                std::vector<double>& gradient) const {
     const MaterialForm form(scene_, params, options.first_vertex);
     const auto silhouettes = prepare(scene_, edges_, params, form, options);
-    if (silhouettes->edges.empty()) return;
+    if (silhouettes->edges.empty() && silhouettes->terminators.empty()) return;
     boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
         return sample_boundary(scene_, *silhouettes, form, index, sampler, options.path, rays);
     }, gradient);

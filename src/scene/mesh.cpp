@@ -7,15 +7,6 @@
 
 namespace penumbra {
 
-namespace {
-
-// Angle between unit vectors, stable for small and large angles: 2 asin(|a - b| / 2).
-float unit_angle(const Vec3f& a, const Vec3f& b) {
-    return dot(a, b) < 0.f ? Pi - 2.f * std::asin(0.5f * norm(a + b)) : 2.f * std::asin(0.5f * norm(a - b));
-}
-
-} // namespace
-
 // Positions transform as points, normals with the inverse transpose and are renormalized (also for the
 // identity, as Mitsuba 3 does); zero normals stay zero so that the shading falls back to the face normal.
 void TriangleMesh::apply_transform(const Transform& to_world) {
@@ -72,14 +63,7 @@ void recompute_vertex_normals(TriangleMesh& mesh) {
     for (size_t f = 0; f < mesh.face_count(); ++f) {
         const uint32_t* i = &mesh.indices[3 * f];
         const Vec3f p[3] = {mesh.positions[i[0]], mesh.positions[i[1]], mesh.positions[i[2]]};
-        const Vec3f n = cross(p[1] - p[0], p[2] - p[0]);
-        const float length = norm(n);
-        if (!(length > 0.f)) continue;
-        for (int k = 0; k < 3; ++k) {
-            const Vec3f e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
-            const float l1 = norm(e1), l2 = norm(e2);
-            if (l1 > 0.f && l2 > 0.f) mesh.normals[i[k]] += n * (unit_angle(e1 / l1, e2 / l2) / length);
-        }
+        for (int k = 0; k < 3; ++k) mesh.normals[i[k]] += corner_normal(p, k);
     }
     for (Vec3f& n : mesh.normals) {
         const float length = norm(n);

@@ -2,6 +2,7 @@
 #pragma once
 #include "core/transform.h"
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -34,8 +35,27 @@ struct TriangleMesh {
 };
 
 // Smooth vertex normals (replacing any present): the angle-weighted sum of the incident face normals, as
-// Mitsuba 3 computes them for meshes loaded without normals.
+// Mitsuba 3 computes them for meshes loaded without normals and whenever their vertex_positions change.
 void recompute_vertex_normals(TriangleMesh& mesh);
+
+// Angle between unit vectors, stable for small and large angles: 2 asin(|a - b| / 2).
+template <typename T> T unit_angle(const Vec3<T>& a, const Vec3<T>& b) {
+    using std::asin;
+    return detach(dot(a, b)) < 0.f ? T(Pi) - T(2.f) * asin(T(0.5f) * norm(a + b))
+                                   : T(2.f) * asin(T(0.5f) * norm(a - b));
+}
+
+// The term of triangle (p[0], p[1], p[2]) in the smooth normal of its corner k (Thuermer & Wuethrich 1998, as
+// Mitsuba 3): its unit face normal times the corner's angle; zero for a degenerate face or corner. Templated so
+// that the estimators differentiate the normals through the positions with the same formula.
+template <typename T> Vec3<T> corner_normal(const Vec3<T> (&p)[3], int k) {
+    const Vec3<T> n = cross(p[1] - p[0], p[2] - p[0]);
+    const T length = norm(n);
+    const Vec3<T> e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
+    const T l1 = norm(e1), l2 = norm(e2);
+    if (!(detach(length) > 0.f && detach(l1) > 0.f && detach(l2) > 0.f)) return Vec3<T>(T(0.f));
+    return n * (unit_angle(e1 / l1, e2 / l2) / length);
+}
 
 // Loaders; every error names the file (and line for text formats).
 TriangleMesh load_obj(const std::string& path);

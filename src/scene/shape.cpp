@@ -48,6 +48,20 @@ void Shape::finalize() {
     if (!(total > 0.0)) throw LoadError(location, what + ": the mesh has zero surface area");
     area_distribution_ = DiscreteDistribution(areas);
     total_area_ = float(total);
+    build_rings();
+}
+
+// Counting sort of the faces by vertex.
+void Shape::build_rings() {
+    ring_offsets_.clear();
+    ring_faces_.clear();
+    if (face_normals || mesh.normals.empty()) return;
+    ring_offsets_.assign(mesh.vertex_count() + 1, 0);
+    for (const uint32_t v : mesh.indices) ++ring_offsets_[v + 1];
+    for (size_t v = 0; v < mesh.vertex_count(); ++v) ring_offsets_[v + 1] += ring_offsets_[v];
+    ring_faces_.resize(mesh.indices.size());
+    std::vector<uint32_t> next(ring_offsets_.begin(), ring_offsets_.end() - 1);
+    for (size_t i = 0; i < mesh.indices.size(); ++i) ring_faces_[next[mesh.indices[i]]++] = uint32_t(i / 3);
 }
 
 void Shape::update_from_group() {

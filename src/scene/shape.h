@@ -7,6 +7,7 @@
 #include "scene/mesh.h"
 
 #include <memory>
+#include <utility>
 
 namespace penumbra {
 
@@ -46,6 +47,12 @@ public:
     float surface_area() const { return total_area_; }
     size_t degenerate_count() const { return degenerate_count_; }
 
+    // The faces around vertex v, [first, last): the terms of its smooth normal (recompute_vertex_normals).
+    // Built by finalize() for meshes shaded with vertex normals.
+    std::pair<const uint32_t*, const uint32_t*> faces_around(uint32_t v) const {
+        return {ring_faces_.data() + ring_offsets_[v], ring_faces_.data() + ring_offsets_[v + 1]};
+    }
+
     // Uniform sampling by area (pdf = 1 / area).
     PositionSample3f sample_position(const Vec2f& u) const;
     float pdf_position() const { return 1.f / total_area_; }
@@ -56,7 +63,9 @@ public:
     SurfaceInteraction3f compute_surface_interaction(const Ray& ray, float t, uint32_t prim, float b1, float b2) const;
 
 private:
+    void build_rings();
     DiscreteDistribution area_distribution_;
+    std::vector<uint32_t> ring_offsets_, ring_faces_;
     float total_area_ = 0.f;
     size_t degenerate_count_ = 0;
 };
