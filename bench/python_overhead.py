@@ -35,7 +35,7 @@ def main():
     p.add_argument("--param", default="white.reflectance")
     p.add_argument("--spp", type=int, default=32)
     p.add_argument("--method", default="interior")
-    p.add_argument("--repeat", type=int, default=3)
+    p.add_argument("--repeat", type=int, default=5)
     a = p.parse_args()
     tmp = Path(tempfile.mkdtemp())
 
