@@ -26,6 +26,7 @@ std::shared_ptr<Object> make_rfilter(const Properties& props, const LoadContext&
 std::shared_ptr<Object> make_sampler(const Properties& props, const LoadContext& ctx);
 std::shared_ptr<Object> make_medium(const Properties& props, const LoadContext& ctx);
 std::shared_ptr<Object> make_phase(const Properties& props, const LoadContext& ctx);
+std::shared_ptr<Object> make_volume(const Properties& props, const LoadContext& ctx);
 std::shared_ptr<Object> make_integrator(const Properties& props, const LoadContext& ctx);
 
 // "file:line: unsupported <kind> plugin '<type>'" (one clear line).

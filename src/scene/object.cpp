@@ -17,6 +17,7 @@ const char* kind_name(ObjectKind kind) {
     case ObjectKind::Integrator: return "integrator";
     case ObjectKind::Medium: return "medium";
     case ObjectKind::Phase: return "phase";
+    case ObjectKind::Volume: return "volume";
     }
     return "object";
 }

@@ -8,7 +8,7 @@
 
 namespace penumbra {
 
-enum class ObjectKind { Shape, BSDF, Texture, Emitter, Sensor, Film, RFilter, Sampler, Integrator, Medium, Phase };
+enum class ObjectKind { Shape, BSDF, Texture, Emitter, Sensor, Film, RFilter, Sampler, Integrator, Medium, Phase, Volume };
 
 const char* kind_name(ObjectKind kind); // XML tag name: "shape", "bsdf", ...
 

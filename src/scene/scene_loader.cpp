@@ -39,6 +39,8 @@ Factory factory_for(ObjectKind kind) {
         return make_medium;
     case ObjectKind::Phase:
         return make_phase;
+    case ObjectKind::Volume:
+        return make_volume;
     }
     return nullptr;
 }

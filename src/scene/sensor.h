@@ -12,6 +12,7 @@
 
 namespace penumbra {
 
+class Medium;
 class Shape;
 
 class Sensor : public Object {
@@ -20,6 +21,7 @@ public:
     Transform to_world;
     std::shared_ptr<Film> film;
     std::shared_ptr<SamplerDesc> sampler;
+    std::shared_ptr<Medium> medium; // the medium the sensor sits in (Mitsuba's `medium` child), or null
     float near_clip = 1e-2f, far_clip = 1e4f;
 
     // Whether every world point has one film position, so that film_position() and to_sensor() are exact (a

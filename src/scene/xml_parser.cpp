@@ -59,7 +59,8 @@ const std::map<std::string, ObjectKind>& object_tags() {
                                                            {"sampler", ObjectKind::Sampler},
                                                            {"integrator", ObjectKind::Integrator},
                                                            {"medium", ObjectKind::Medium},
-                                                           {"phase", ObjectKind::Phase}};
+                                                           {"phase", ObjectKind::Phase},
+                                                           {"volume", ObjectKind::Volume}};
     return tags;
 }
 

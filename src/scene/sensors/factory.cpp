@@ -6,7 +6,10 @@
 //   shutter_open, shutter_close  float      0, 0       (accepted; penumbra renders static scenes)
 //   film                         nested     hdrfilm with its defaults
 //   sampler                      nested     independent with its defaults
+//   medium                       nested     none: the medium the sensor sits in
 #include "scene/sensors/sensor_common.h"
+
+#include "scene/medium.h"
 
 namespace penumbra {
 
@@ -48,6 +51,7 @@ void load_sensor_common(Sensor& sensor, const Properties& props, const LoadConte
         sampler->plugin = "independent";
         sampler->location = props.location();
     }
+    sensor.medium = std::dynamic_pointer_cast<Medium>(single_child(props, ObjectKind::Medium));
     sensor.sampler = std::dynamic_pointer_cast<SamplerDesc>(sampler);
     if (!sensor.sampler) throw LoadError(sampler->location, props.plugin() + ": unsupported sampler object");
 }

@@ -1,0 +1,31 @@
+#include "render/volume_visibility.h"
+
+#include "render/medium_sampling.h"
+
+namespace penumbra {
+
+Color3f segment_transmittance(const Scene& scene, Ray ray, const Medium* medium, Sampler& sampler,
+                              RayCounter& rays) {
+    Color3f tr(1.f);
+    // A bound on the number of null surfaces crossed guards against rays stuck on coincident surfaces.
+    for (int crossing = 0; crossing < 256; ++crossing) {
+        ++rays.rays;
+        const SurfaceInteraction3f si = scene.intersect(ray);
+        const float end = si.is_valid() ? si.t : ray.tmax;
+        if (medium) {
+            tr *= transmittance(*medium, ray.o, ray.d, end, sampler);
+            if (is_black(tr)) return tr;
+        }
+        if (!si.is_valid()) return tr;
+        const BSDF* bsdf = si.bsdf();
+        if (!bsdf || bsdf->flags() != BSDFNull) return Color3f(0.f);
+        medium = target_medium(*si.shape, si.n, ray.d, medium);
+        Ray next = si.spawn_ray(ray.d);
+        next.tmax = ray.tmax - si.t - dot(next.o - si.p, ray.d);
+        if (!(next.tmax > 0.f)) return tr;
+        ray = next;
+    }
+    return Color3f(0.f);
+}
+
+} // namespace penumbra
