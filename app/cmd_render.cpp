@@ -3,6 +3,7 @@
 
 #include "render/film_output.h"
 #include "render/integrator.h"
+#include "scene/medium.h"
 #include "render/render.h"
 #include "scene/scene.h"
 
@@ -74,6 +75,30 @@ int cmd_info(const std::string& scene_path, const std::vector<std::string>& defi
     std::printf("emitters: %zu\n", scene->emitters.size());
     for (const auto& e : scene->emitters)
         std::printf("  %-12s %s\n", e->plugin.c_str(), e->id.empty() ? "-" : e->id.c_str());
+    // Media, with the objects that reference them (shape sides, the sensor, lights).
+    std::vector<std::pair<const Medium*, std::string>> media;
+    auto note_medium = [&](const Medium* m, const std::string& user) {
+        if (!m) return;
+        for (auto& [medium, users] : media)
+            if (medium == m) {
+                users += ", " + user;
+                return;
+            }
+        media.emplace_back(m, user);
+    };
+    for (const auto& sensor : scene->sensors) note_medium(sensor->medium.get(), "sensor " + sensor->id);
+    for (const auto& s : scene->shapes) {
+        const std::string name = s->id.empty() ? s->plugin : s->id;
+        note_medium(s->interior.get(), name + " (interior)");
+        note_medium(s->exterior.get(), name + " (exterior)");
+    }
+    for (const auto& e : scene->emitters) note_medium(e->medium.get(), e->id.empty() ? e->plugin : e->id);
+    if (!media.empty()) {
+        std::printf("media: %zu\n", media.size());
+        for (const auto& [m, users] : media)
+            std::printf("  %-12s %-16s used by %s\n", m->plugin.c_str(), m->id.empty() ? "-" : m->id.c_str(),
+                        users.c_str());
+    }
     std::map<std::string, int> materials;
     for (const auto& s : scene->shapes)
         if (s->bsdf) materials[s->bsdf->id.empty() ? "(" + s->bsdf->plugin + ")" : s->bsdf->id]++;
@@ -100,7 +125,7 @@ void add_render_commands(CLI::App& app) {
     render->add_option("--seed", opt->seed, "random seed");
     render->add_option("--threads", opt->threads, "worker threads (default: all)")->check(CLI::NonNegativeNumber);
     render->add_option("-D", opt->defines, "override a <default> value: name=value");
-    render->add_option("--integrator", opt->integrator, "replace the scene's integrator (path, direct, ptracer)");
+    render->add_option("--integrator", opt->integrator, "replace the scene's integrator (path, volpath, volpathmis, bdpt, direct, ptracer)");
     render->add_option("--sensor", opt->sensor,
                        "the sensor to render: an index (default 0) or a sensor's id");
     render->add_flag("-q,--quiet", opt->quiet, "no progress bar");

@@ -2,6 +2,8 @@
 // in the plugin's own file.
 #include "scene/emitters/emitters.h"
 
+#include "scene/medium.h"
+
 namespace penumbra {
 
 void check_emission(const Properties& props, const std::string& name, const Color3f& value) {
@@ -29,7 +31,9 @@ DirectionSample3f delta_position_sample(const Emitter* emitter, const Vec3f& pos
     return ds;
 }
 
-std::shared_ptr<Object> make_emitter(const Properties& props, const LoadContext& ctx) {
+namespace {
+
+std::shared_ptr<Object> make_emitter_of_type(const Properties& props, const LoadContext& ctx) {
     const std::string& type = props.plugin();
     if (type == "area") return make_area_emitter(props);
     if (type == "point") return make_point_emitter(props);
@@ -39,6 +43,23 @@ std::shared_ptr<Object> make_emitter(const Properties& props, const LoadContext&
     if (type == "constant") return make_constant_emitter(props);
     if (type == "envmap") return make_envmap_emitter(props, ctx);
     throw_unsupported_plugin(props, ObjectKind::Emitter);
+}
+
+} // namespace
+
+// Every emitter may nest one medium (Mitsuba's Endpoint); only lights at a point can use it.
+std::shared_ptr<Object> make_emitter(const Properties& props, const LoadContext& ctx) {
+    auto emitter = std::static_pointer_cast<Emitter>(make_emitter_of_type(props, ctx));
+    const auto media = props.objects(ObjectKind::Medium);
+    if (media.size() > 1) throw LoadError(media[1]->location, props.plugin() + ": more than one medium given");
+    if (!media.empty()) {
+        if (!(emitter->flags() & EmitterDeltaPosition))
+            throw LoadError(media[0]->location,
+                            props.plugin() + ": only point, spot and projector lights sit in a medium (area lights "
+                                             "emit into their shape's interior/exterior media)");
+        emitter->medium = std::static_pointer_cast<Medium>(media[0]);
+    }
+    return emitter;
 }
 
 } // namespace penumbra
