@@ -73,7 +73,7 @@ FreeFlightSample sample_free_flight(const Medium& medium, const Vec3f& o, const 
                 done = true;
                 return false;
             }
-            if (u < pa + ps) {
+            if (u < pa + ps || !(pn > 0.f)) { // (the second test guards the rounding of u up to total)
                 s.event = FreeFlightSample::Event::Scattered;
                 s.t = t;
                 s.p = p;
