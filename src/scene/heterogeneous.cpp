@@ -36,8 +36,14 @@ class HeterogeneousMedium final : public MediumBase<HeterogeneousMedium> {
         const BoundingBox3f box = sigma_t_volume->bbox();
         float a = tmin, b = tmax;
         if (box.is_valid()) {
+            // The box grown by a slack far above the rounding of o + t d near it, so that points of the zero
+            // segments never round into the box (where sigma_t is not zero); the margin is covered by the
+            // grid's bound outside its unit cube.
+            const float slack = 1e-5f * (max_component(abs(o)) + max_component(box.hi - box.lo) +
+                                         max_component(max(abs(box.lo), abs(box.hi))));
+            const BoundingBox3f grown{box.lo - Vec3f(slack), box.hi + Vec3f(slack)};
             float t0, t1;
-            if (!box.intersect(o, d, t0, t1) || !(std::max(t0, tmin) < std::min(t1, tmax))) {
+            if (!grown.intersect(o, d, t0, t1) || !(std::max(t0, tmin) < std::min(t1, tmax))) {
                 f(tmin, tmax, 0.f);
                 return;
             }
