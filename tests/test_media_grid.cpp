@@ -36,20 +36,24 @@ std::shared_ptr<Medium> grid_medium(const TempDir& dir, int channels, const std:
                                     const std::string& volume_extra = "") {
     write_bytes(dir.str() + "/density.vol",
                 vol_bytes({24, 12, 17}, channels, Vec3f(0.f), Vec3f(1.f), density));
-    write_bytes(dir.str() + "/albedo.vol", vol_bytes({5, 4, 3}, 3, Vec3f(0.f), Vec3f(1.f), [](int x, int y, int z, int c) {
+    write_bytes(dir.str() + "/albedo.vol",
+                vol_bytes({5, 4, 3}, 3, Vec3f(0.f), Vec3f(1.f), [](int x, int y, int z, int c) {
                     return 0.2f + 0.15f * float(x) + 0.05f * float(y * z) - 0.1f * float(c);
                 }));
-    const std::string placement = "<transform name=\"to_world\"><scale x=\"2\" y=\"1.5\" z=\"1.2\"/>"
-                                  "<rotate y=\"1\" angle=\"30\"/><translate x=\"-1\" y=\"-0.7\" z=\"-0.4\"/></transform>";
-    return load_medium("<medium type=\"heterogeneous\" name=\"interior\">\n"
-                       "<volume type=\"gridvolume\" name=\"sigma_t\"><string name=\"filename\" value=\"density.vol\"/>" +
-                           placement + volume_extra + "</volume>\n<float name=\"scale\" value=\"1.5\"/>\n" +
-                           albedo_xml + "\n</medium>",
-                       dir.str());
+    const std::string placement =
+        "<transform name=\"to_world\"><scale x=\"2\" y=\"1.5\" z=\"1.2\"/>"
+        "<rotate y=\"1\" angle=\"30\"/><translate x=\"-1\" y=\"-0.7\" z=\"-0.4\"/></transform>";
+    return load_medium(
+        "<medium type=\"heterogeneous\" name=\"interior\">\n"
+        "<volume type=\"gridvolume\" name=\"sigma_t\"><string name=\"filename\" value=\"density.vol\"/>" +
+            placement + volume_extra + "</volume>\n<float name=\"scale\" value=\"1.5\"/>\n" + albedo_xml +
+            "\n</medium>",
+        dir.str());
 }
-const std::string kAlbedoGrid = "<volume type=\"gridvolume\" name=\"albedo\"><string name=\"filename\" "
-                                "value=\"albedo.vol\"/><transform name=\"to_world\"><translate x=\"-1\" y=\"-1\" "
-                                "z=\"-1\"/><scale value=\"2\"/></transform></volume>";
+const std::string kAlbedoGrid =
+    "<volume type=\"gridvolume\" name=\"albedo\"><string name=\"filename\" "
+    "value=\"albedo.vol\"/><transform name=\"to_world\"><translate x=\"-1\" y=\"-1\" "
+    "z=\"-1\"/><scale value=\"2\"/></transform></volume>";
 
 struct Reference {
     Color3f tr, scattered; // exp(-∫_0^tmax sigma_t), ∫_0^tmax Tr(0, t) sigma_s(t) dt
@@ -66,12 +70,14 @@ Reference quadrature(const Medium& m, const Vec3f& o, const Vec3f& d, float tmax
         const Color3f st = m.sigma_t(p), ss = st * m.albedo(p);
         Vec3d sigma(st), g;
         if (i > 0) tau += (sigma + prev_sigma) * (0.5 * h);
-        for (int c = 0; c < 3; ++c) g[c] = std::exp(-tau[c]) * double(ss[c]);
+        for (int c = 0; c < 3; ++c)
+            g[c] = std::exp(-tau[c]) * double(ss[c]);
         if (i > 0) scattered += (g + prev_g) * (0.5 * h);
         prev_sigma = sigma;
         prev_g = g;
     }
-    return {Color3f(float(std::exp(-tau.x)), float(std::exp(-tau.y)), float(std::exp(-tau.z))), Color3f(scattered)};
+    return {Color3f(float(std::exp(-tau.x)), float(std::exp(-tau.y)), float(std::exp(-tau.z))),
+            Color3f(scattered)};
 }
 
 void expect_z(const ChannelStats& s, int c, double expected, const std::string& what) {
@@ -95,9 +101,10 @@ struct TestRay {
 // Through the grid's centre (0.17, 0.05, -0.38) in the world: across the whole grid, ending just past the
 // centre, and starting near it.
 const Vec3f kCentre(0.166f, 0.05f, -0.38f);
-const TestRay kRays[] = {{kCentre - normalize(Vec3f(1.f, 0.1f, 0.05f)) * 3.f, normalize(Vec3f(1.f, 0.1f, 0.05f)), 10.f},
-                         {kCentre - normalize(Vec3f(-0.1f, 1.f, 0.2f)) * 2.f, normalize(Vec3f(-0.1f, 1.f, 0.2f)), 2.3f},
-                         {kCentre + Vec3f(0.1f), normalize(Vec3f(-0.6f, 0.3f, -0.4f)), 1.5f}};
+const TestRay kRays[] = {
+    {kCentre - normalize(Vec3f(1.f, 0.1f, 0.05f)) * 3.f, normalize(Vec3f(1.f, 0.1f, 0.05f)), 10.f},
+    {kCentre - normalize(Vec3f(-0.1f, 1.f, 0.2f)) * 2.f, normalize(Vec3f(-0.1f, 1.f, 0.2f)), 2.3f},
+    {kCentre + Vec3f(0.1f), normalize(Vec3f(-0.6f, 0.3f, -0.4f)), 1.5f}};
 
 // Runs both trackers along every test ray; `grey` adds the pass-probability check of delta tracking (for a
 // grey medium it is exactly Tr).
@@ -160,7 +167,8 @@ TEST(MediaGrid, AbsorbingGridTransmittanceIsExpOfIntegratedDensity) {
 TEST(MediaGrid, MajorantsBoundSigmaTAlongRandomRays) {
     const std::pair<const char*, std::string> configs[] = {
         {"trilinear clamp", ""},
-        {"nearest repeat", "<string name=\"filter_type\" value=\"nearest\"/><string name=\"wrap_mode\" value=\"repeat\"/>"},
+        {"nearest repeat",
+         "<string name=\"filter_type\" value=\"nearest\"/><string name=\"wrap_mode\" value=\"repeat\"/>"},
         {"trilinear mirror", "<string name=\"wrap_mode\" value=\"mirror\"/>"}};
     for (const auto& [name, extra] : configs) {
         TempDir dir;
@@ -198,7 +206,8 @@ TEST(MediaGrid, MajorantsBoundSigmaTAlongRandomRays) {
         }
         const float global = *std::max_element(bounds.begin(), bounds.end());
         const auto inside = std::count_if(bounds.begin(), bounds.end(), [](float m) { return m > 0.f; });
-        const auto refined = std::count_if(bounds.begin(), bounds.end(), [&](float m) { return m > 0.f && m < 0.5f * global; });
+        const auto refined = std::count_if(bounds.begin(), bounds.end(),
+                                           [&](float m) { return m > 0.f && m < 0.5f * global; });
         std::printf("  %-17s %d segments (%d non-zero, %d below half the largest), %d points checked\n", name,
                     segments, int(inside), int(refined), points);
         // The block structure is used: many segments are much tighter than the global bound (not with

@@ -76,7 +76,8 @@ double chi2_p_value(const PhaseFunction& phase, const PhaseFunction& pdf_of, int
                 for (int b = 0; b < sub; ++b) {
                     const double z = -1.0 + dz * (ic + (a + 0.5) / sub), phi = dphi * (ip + (b + 0.5) / sub);
                     const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-                    sum += pdf_of.pdf(kWi, Vec3f(float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)));
+                    sum +=
+                        pdf_of.pdf(kWi, Vec3f(float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)));
                 }
             expected[size_t(ic * n_phi + ip)] = n * sum * dz * dphi / (sub * sub);
         }
@@ -96,7 +97,8 @@ double chi2_p_value(const PhaseFunction& phase, const PhaseFunction& pdf_of, int
         ++dof;
     }
     const double p = chi2_upper_tail(chi2, std::max(dof, 1));
-    report = "chi2 = " + std::to_string(chi2) + ", dof = " + std::to_string(dof) + ", p = " + std::to_string(p);
+    report =
+        "chi2 = " + std::to_string(chi2) + ", dof = " + std::to_string(dof) + ", p = " + std::to_string(p);
     return p;
 }
 
@@ -110,7 +112,8 @@ class MediaPhase : public ::testing::TestWithParam<std::string> {};
 TEST_P(MediaPhase, NormalizedWithMeanCosineG) {
     const auto phase = make(GetParam());
     const float g = g_of(GetParam());
-    const double total = sphere_integral([&](const Vec3f& wo) { return double(phase->eval<float>(kWi, wo)); });
+    const double total =
+        sphere_integral([&](const Vec3f& wo) { return double(phase->eval<float>(kWi, wo)); });
     const double mean_cos =
         sphere_integral([&](const Vec3f& wo) { return double(phase->eval<float>(kWi, wo)) * -dot(kWi, wo); });
     std::printf("  %s: integral %.6f, mean cosine %.6f (g = %g)\n", GetParam().c_str(), total, mean_cos, g);
@@ -150,12 +153,15 @@ TEST_P(MediaPhase, ChiSquareOfSampledDirections) {
     EXPECT_GT(p, 1e-4) << report;
 }
 
-INSTANTIATE_TEST_SUITE_P(Media, MediaPhase, ::testing::Values("isotropic", "hg_-0.7", "hg_0", "hg_0.3", "hg_0.9"),
+INSTANTIATE_TEST_SUITE_P(Media, MediaPhase,
+                         ::testing::Values("isotropic", "hg_-0.7", "hg_0", "hg_0.3", "hg_0.9"),
                          [](const ::testing::TestParamInfo<std::string>& info) {
                              std::string s = info.param;
                              for (char& c : s)
-                                 if (c == '-') c = 'm';
-                                 else if (c == '.') c = 'p';
+                                 if (c == '-')
+                                     c = 'm';
+                                 else if (c == '.')
+                                     c = 'p';
                              return s;
                          });
 

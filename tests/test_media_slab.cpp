@@ -36,14 +36,15 @@ std::string medium_xml(const SlabCase& c) {
     auto rgb = [](const Color3f& v) {
         return std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z);
     };
-    return std::string("<medium type=\"") + c.medium_type + "\" name=\"interior\">\n<rgb name=\"sigma_t\" value=\"" +
-           rgb(c.sigma_t) + "\"/>\n<rgb name=\"albedo\" value=\"" + rgb(c.albedo) + "\"/>\n</medium>";
+    return std::string("<medium type=\"") + c.medium_type +
+           "\" name=\"interior\">\n<rgb name=\"sigma_t\" value=\"" + rgb(c.sigma_t) +
+           "\"/>\n<rgb name=\"albedo\" value=\"" + rgb(c.albedo) + "\"/>\n</medium>";
 }
 
 void expect_z(const ChannelStats& s, int c, double expected, const std::string& what) {
     const double z = s.z(c, expected);
-    EXPECT_LT(std::abs(z), kMaxZ) << what << " channel " << c << ": mean " << s.mean(c) << " expected " << expected
-                                  << " stderr " << s.stderr_(c) << " z " << z;
+    EXPECT_LT(std::abs(z), kMaxZ) << what << " channel " << c << ": mean " << s.mean(c) << " expected "
+                                  << expected << " stderr " << s.stderr_(c) << " z " << z;
     std::printf("  %-28s c%d  mean %.5f  expected %.5f  z %+.2f  (detects bias > %.2g)\n", what.c_str(), c,
                 s.mean(c), expected, z, kMaxZ * s.stderr_(c));
 }
@@ -85,7 +86,8 @@ TEST_P(MediaSlab, FreeFlightAndTransmittanceMatchClosedForms) {
         expect_z(scattered_t, c, sigma > 0 ? albedo * (1 - tr * (1 + sigma * depth)) / sigma : 0.0,
                  "E[w t 1(scatter)]");
         if (medium->is_homogeneous())
-            EXPECT_NEAR(tr_estimate.mean(c), tr, 1e-6 * tr + 1e-7) << "closed-form transmittance, channel " << c;
+            EXPECT_NEAR(tr_estimate.mean(c), tr, 1e-6 * tr + 1e-7)
+                << "closed-form transmittance, channel " << c;
         else
             expect_z(tr_estimate, c, tr, "ratio tracking Tr");
     }
@@ -102,8 +104,9 @@ TEST_P(MediaSlab, FreeFlightAndTransmittanceMatchClosedForms) {
 // sampled channel's density alone would be biased there), and the tracking path with a constant grid.
 INSTANTIATE_TEST_SUITE_P(
     Media, MediaSlab,
-    ::testing::Values(SlabCase{"homogeneous_chromatic", "homogeneous", {0.5f, 1.f, 2.f}, {0.9f, 0.5f, 0.2f}},
-                      SlabCase{"homogeneous_zero_channel", "homogeneous", {0.f, 0.7f, 3.f}, {0.8f, 0.6f, 0.95f}},
-                      SlabCase{"tracking_chromatic", "heterogeneous", {0.5f, 1.f, 2.f}, {0.9f, 0.5f, 0.2f}},
-                      SlabCase{"tracking_zero_channel", "heterogeneous", {0.f, 0.7f, 3.f}, {0.8f, 0.6f, 0.95f}}),
+    ::testing::Values(
+        SlabCase{"homogeneous_chromatic", "homogeneous", {0.5f, 1.f, 2.f}, {0.9f, 0.5f, 0.2f}},
+        SlabCase{"homogeneous_zero_channel", "homogeneous", {0.f, 0.7f, 3.f}, {0.8f, 0.6f, 0.95f}},
+        SlabCase{"tracking_chromatic", "heterogeneous", {0.5f, 1.f, 2.f}, {0.9f, 0.5f, 0.2f}},
+        SlabCase{"tracking_zero_channel", "heterogeneous", {0.f, 0.7f, 3.f}, {0.8f, 0.6f, 0.95f}}),
     [](const ::testing::TestParamInfo<SlabCase>& info) { return std::string(info.param.name); });

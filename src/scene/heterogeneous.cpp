@@ -31,7 +31,8 @@ class HeterogeneousMedium final : public MediumBase<HeterogeneousMedium> {
     }
     template <typename T> Color3<T> albedo_t(const Vec3<T>& p) const { return albedo_volume->eval(p); }
 
-    void majorants(const Vec3f& o, const Vec3f& d, float tmin, float tmax, const MajorantVisitor& f) const override {
+    void majorants(const Vec3f& o, const Vec3f& d, float tmin, float tmax,
+                   const MajorantVisitor& f) const override {
         if (!(tmin < tmax)) return;
         const BoundingBox3f box = sigma_t_volume->bbox();
         float a = tmin, b = tmax;

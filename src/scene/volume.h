@@ -40,7 +40,8 @@ class Volume : public Object {
     // covering the interval, in order, with bound >= every channel's value on [s0, s1); stops when f returns
     // false. Grids report one segment per block of their coarse grid of maxima; the default is one segment.
     using BoundVisitor = std::function<bool(float s0, float s1, float bound)>;
-    virtual void max_segments(const Vec3f& o, const Vec3f& d, float t0, float t1, const BoundVisitor& f) const {
+    virtual void max_segments(const Vec3f& o, const Vec3f& d, float t0, float t1,
+                              const BoundVisitor& f) const {
         if (t0 < t1) f(t0, t1, max_along(o, d, t0, t1));
     }
     // World-space support outside which the value is that of the nearest boundary texel (grids) or the

@@ -7,7 +7,8 @@
 //   filter_type    string     trilinear   trilinear | nearest
 //   wrap_mode      string     clamp       clamp | repeat | mirror: lookups outside the unit cube
 //   to_world       transform  identity    places the grid's unit cube [0, 1]^3 in the world
-//   use_grid_bbox  boolean    false       .vol: the unit cube is first mapped to the bounding box stored in the
+//   use_grid_bbox  boolean    false       .vol: the unit cube is first mapped to the bounding box stored in
+//   the
 //                                         file, then by to_world. .vdb grids are always placed by their own
 //                                         index-to-world transform (then to_world); the flag changes nothing
 //   raw            boolean    false       accepted: penumbra renders in RGB, so 3-channel values are used as
@@ -32,8 +33,8 @@ GridVolume::GridVolume(VolumeGridData grid, const Transform& unit_to_world, Filt
     : res_(grid.res), channels_(grid.channels), values_(std::move(grid.values)),
       to_local_(unit_to_world.inverse()), filter_(filter), wrap_(wrap) {
     for (int corner = 0; corner < 8; ++corner) {
-        const Vec3f p = unit_to_world.apply_point(
-            Vec3f(float(corner & 1), float((corner >> 1) & 1), float(corner >> 2)));
+        const Vec3f p =
+            unit_to_world.apply_point(Vec3f(float(corner & 1), float((corner >> 1) & 1), float(corner >> 2)));
         bbox_.lo = penumbra::min(bbox_.lo, p);
         bbox_.hi = penumbra::max(bbox_.hi, p);
     }
@@ -92,8 +93,10 @@ float GridVolume::max_along(const Vec3f& o, const Vec3f& d, float t0, float t1) 
 }
 
 // 3D-DDA over the blocks (Amanatides & Woo 1987) in the grid's unit-cube frame, where the ray keeps its
-// parameter t (to_local is affine). Outside the unit cube the wrap mode repeats grid values: bounded by max().
-void GridVolume::max_segments(const Vec3f& o, const Vec3f& d, float t0, float t1, const BoundVisitor& f) const {
+// parameter t (to_local is affine). Outside the unit cube the wrap mode repeats grid values: bounded by
+// max().
+void GridVolume::max_segments(const Vec3f& o, const Vec3f& d, float t0, float t1,
+                              const BoundVisitor& f) const {
     if (!(t0 < t1)) return;
     const Vec3f ol = to_local_.apply_point(o), dl = to_local_.apply_vector(d);
     const BoundingBox3f unit{Vec3f(0.f), Vec3f(1.f)};
@@ -120,7 +123,8 @@ void GridVolume::max_segments(const Vec3f& o, const Vec3f& d, float t0, float t1
     }
     float t = a;
     for (;;) {
-        const int axis = t_next.x <= t_next.y ? (t_next.x <= t_next.z ? 0 : 2) : (t_next.y <= t_next.z ? 1 : 2);
+        const int axis =
+            t_next.x <= t_next.y ? (t_next.x <= t_next.z ? 0 : 2) : (t_next.y <= t_next.z ? 1 : 2);
         const float t_end = std::min(t_next[axis], b);
         if (t_end > t) {
             if (!f(t, t_end, block_max(cell.x, cell.y, cell.z))) return;
@@ -147,7 +151,8 @@ std::string GridVolume::to_string() const {
 std::shared_ptr<Object> make_gridvolume(const Properties& props, const LoadContext& ctx) {
     const std::string filter = props.get_string("filter_type", "trilinear");
     if (filter != "trilinear" && filter != "nearest")
-        props.raise("filter_type", "invalid filter_type '" + filter + "' (expected 'trilinear' or 'nearest')");
+        props.raise("filter_type",
+                    "invalid filter_type '" + filter + "' (expected 'trilinear' or 'nearest')");
     const std::string wrap = props.get_string("wrap_mode", "clamp");
     if (wrap != "clamp" && wrap != "repeat" && wrap != "mirror")
         props.raise("wrap_mode", "invalid wrap_mode '" + wrap + "' (expected 'clamp', 'repeat' or 'mirror')");
@@ -168,8 +173,8 @@ std::shared_ptr<Object> make_gridvolume(const Properties& props, const LoadConte
         props.raise("filename", "'" + filename + "': " + e.what());
     }
     if (use_grid_bbox && !grid.has_placement)
-        props.raise("use_grid_bbox", "'" + filename +
-                                         "': the bounding box stored in the file is degenerate or not finite");
+        props.raise("use_grid_bbox",
+                    "'" + filename + "': the bounding box stored in the file is degenerate or not finite");
 
     const Transform unit_to_world = (vdb || use_grid_bbox) ? to_world * grid.unit_to_file : to_world;
     float max_value = -1.f;

@@ -44,8 +44,8 @@ class GridVolume final : public VolumeBase<GridVolume> {
         Color3<T> result(T(0.f));
         for (int corner = 0; corner < 8; ++corner) {
             const int cx = corner & 1, cy = (corner >> 1) & 1, cz = corner >> 2;
-            const T weight = (cx ? w[0] : T(1.f) - w[0]) * (cy ? w[1] : T(1.f) - w[1]) *
-                             (cz ? w[2] : T(1.f) - w[2]);
+            const T weight =
+                (cx ? w[0] : T(1.f) - w[0]) * (cy ? w[1] : T(1.f) - w[1]) * (cz ? w[2] : T(1.f) - w[2]);
             result += voxel<T>(cx ? hi[0] : lo[0], cy ? hi[1] : lo[1], cz ? hi[2] : lo[2]) * weight;
         }
         return result;
@@ -54,7 +54,8 @@ class GridVolume final : public VolumeBase<GridVolume> {
     float max() const override { return max_; }
     float min() const override { return min_; }
     float max_along(const Vec3f& o, const Vec3f& d, float t0, float t1) const override;
-    void max_segments(const Vec3f& o, const Vec3f& d, float t0, float t1, const BoundVisitor& f) const override;
+    void max_segments(const Vec3f& o, const Vec3f& d, float t0, float t1,
+                      const BoundVisitor& f) const override;
     BoundingBox3f bbox() const override { return bbox_; }
     int channel_count() const override { return channels_; }
     Vec3i resolution() const { return res_; }

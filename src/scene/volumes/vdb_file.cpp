@@ -20,7 +20,7 @@ constexpr uint64_t MaxDenseVoxels = uint64_t(1) << 28;
 std::string grid_list(const openvdb::GridPtrVec& grids) {
     std::string names;
     for (const auto& g : grids)
-        names += (names.empty() ? "" : ", ") + ("'" + g->getName() + "' (" + g->type() + ")");
+        names += (names.empty() ? "" : ", ") + ("'" + g->getName() + "' (" + g->valueType() + ")");
     return names.empty() ? std::string("no grids") : names;
 }
 
@@ -30,7 +30,7 @@ std::string choose_grid(const openvdb::GridPtrVec& grids, const std::string& wan
         for (const auto& g : grids) {
             if (g->getName() != wanted) continue;
             if (!g->isType<openvdb::FloatGrid>())
-                throw VolumeFileError("grid '" + wanted + "' holds " + g->type() + " values, not float");
+                throw VolumeFileError("grid '" + wanted + "' holds " + g->valueType() + " values, not float");
             return wanted;
         }
         throw VolumeFileError("no grid named '" + wanted + "' (the file holds " + grid_list(grids) + ")");
@@ -75,7 +75,8 @@ VolumeGridData read_vdb_file(const std::string& path, const std::string& grid_na
     }
     if (!grid) throw VolumeFileError("grid '" + name + "' could not be read as a float grid");
     if (!grid->transform().isLinear())
-        throw VolumeFileError("grid '" + name + "' has a non-linear (frustum) transform, which is not supported");
+        throw VolumeFileError("grid '" + name +
+                              "' has a non-linear (frustum) transform, which is not supported");
     const openvdb::CoordBBox box = grid->evalActiveVoxelBoundingBox();
     if (box.empty()) throw VolumeFileError("grid '" + name + "' has no active voxels");
     const openvdb::Coord dim = box.dim();

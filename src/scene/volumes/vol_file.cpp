@@ -56,7 +56,8 @@ VolumeGridData read_vol_file(const std::string& path) {
         throw VolumeFileError("invalid channel count " + std::to_string(channels) + " (expected 1 or 3)");
     grid.channels = channels;
 
-    const uint64_t count = uint64_t(grid.res.x) * uint64_t(grid.res.y) * uint64_t(grid.res.z) * uint64_t(channels);
+    const uint64_t count =
+        uint64_t(grid.res.x) * uint64_t(grid.res.y) * uint64_t(grid.res.z) * uint64_t(channels);
     const uint64_t data_bytes = file_size - HeaderBytes;
     const std::string shape = std::to_string(grid.res.x) + " x " + std::to_string(grid.res.y) + " x " +
                               std::to_string(grid.res.z) + " x " + std::to_string(channels);
@@ -72,7 +73,8 @@ VolumeGridData read_vol_file(const std::string& path) {
     for (uint64_t i = 0; i < count; ++i) {
         if (std::isfinite(grid.values[i])) continue;
         const uint64_t voxel = i / uint64_t(channels);
-        const uint64_t x = voxel % uint64_t(grid.res.x), y = voxel / uint64_t(grid.res.x) % uint64_t(grid.res.y),
+        const uint64_t x = voxel % uint64_t(grid.res.x),
+                       y = voxel / uint64_t(grid.res.x) % uint64_t(grid.res.y),
                        z = voxel / (uint64_t(grid.res.x) * uint64_t(grid.res.y));
         throw VolumeFileError("non-finite value " + std::to_string(grid.values[i]) + " at voxel (" +
                               std::to_string(x) + ", " + std::to_string(y) + ", " + std::to_string(z) +
