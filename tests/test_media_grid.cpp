@@ -32,17 +32,22 @@ float density(int x, int y, int z, int c) {
 }
 
 // The medium: the density grid (scaled by 1.5 and rotated in the world) and a 3-channel albedo grid.
+const std::string kRotated =
+    "<transform name=\"to_world\"><scale x=\"2\" y=\"1.5\" z=\"1.2\"/>"
+    "<rotate y=\"1\" angle=\"30\"/><translate x=\"-1\" y=\"-0.7\" z=\"-0.4\"/></transform>";
+const std::string kAxisAligned =
+    "<transform name=\"to_world\"><scale x=\"2\" y=\"1.5\" z=\"1.2\"/><translate x=\"-1\" y=\"-0.7\" "
+    "z=\"-0.4\"/></transform>";
+
 std::shared_ptr<Medium> grid_medium(const TempDir& dir, int channels, const std::string& albedo_xml,
-                                    const std::string& volume_extra = "") {
+                                    const std::string& volume_extra = "",
+                                    const std::string& placement = kRotated) {
     write_bytes(dir.str() + "/density.vol",
                 vol_bytes({24, 12, 17}, channels, Vec3f(0.f), Vec3f(1.f), density));
     write_bytes(dir.str() + "/albedo.vol",
                 vol_bytes({5, 4, 3}, 3, Vec3f(0.f), Vec3f(1.f), [](int x, int y, int z, int c) {
                     return 0.2f + 0.15f * float(x) + 0.05f * float(y * z) - 0.1f * float(c);
                 }));
-    const std::string placement =
-        "<transform name=\"to_world\"><scale x=\"2\" y=\"1.5\" z=\"1.2\"/>"
-        "<rotate y=\"1\" angle=\"30\"/><translate x=\"-1\" y=\"-0.7\" z=\"-0.4\"/></transform>";
     return load_medium(
         "<medium type=\"heterogeneous\" name=\"interior\">\n"
         "<volume type=\"gridvolume\" name=\"sigma_t\"><string name=\"filename\" value=\"density.vol\"/>" +
@@ -165,22 +170,43 @@ TEST(MediaGrid, AbsorbingGridTransmittanceIsExpOfIntegratedDensity) {
 // in it (including its start and points a hair before its end). Exact comparisons up to float rounding of
 // the trilinear sum (relative 1e-5): a majorant that is too low by any amount at any point fails.
 TEST(MediaGrid, MajorantsBoundSigmaTAlongRandomRays) {
-    const std::pair<const char*, std::string> configs[] = {
-        {"trilinear clamp", ""},
+    struct Config {
+        const char* name;
+        std::string extra;
+        bool axis_aligned; // unrotated grid, rays along the axes, often exactly on block or voxel planes
+    };
+    const Config configs[] = {
+        {"trilinear clamp", "", false},
         {"nearest repeat",
-         "<string name=\"filter_type\" value=\"nearest\"/><string name=\"wrap_mode\" value=\"repeat\"/>"},
-        {"trilinear mirror", "<string name=\"wrap_mode\" value=\"mirror\"/>"}};
-    for (const auto& [name, extra] : configs) {
+         "<string name=\"filter_type\" value=\"nearest\"/><string name=\"wrap_mode\" value=\"repeat\"/>",
+         false},
+        {"trilinear mirror", "<string name=\"wrap_mode\" value=\"mirror\"/>", false},
+        {"axis-aligned rays", "", true}};
+    for (const auto& [name, extra, axis_aligned] : configs) {
         TempDir dir;
-        const auto medium = grid_medium(dir, 3, kAlbedoGrid, extra);
+        const auto medium = grid_medium(dir, 3, kAlbedoGrid, extra, axis_aligned ? kAxisAligned : kRotated);
         PCG32 rng(11);
         int segments = 0, points = 0;
         std::vector<float> bounds;
+        const Vec3f lo(-1.f, -0.7f, -0.4f), size(2.f, 1.5f, 1.2f), res(24.f, 12.f, 17.f);
         for (int r = 0; r < 3000; ++r) {
             auto u = [&] { return rng.next_float(); };
-            const Vec3f o(-3.f + 6.f * u(), -3.f + 6.f * u(), -3.f + 6.f * u());
+            Vec3f o(-3.f + 6.f * u(), -3.f + 6.f * u(), -3.f + 6.f * u());
             const float z = 1.f - 2.f * u(), phi = 2.f * Pi * u(), s = std::sqrt(std::max(0.f, 1.f - z * z));
-            const Vec3f d(s * std::cos(phi), s * std::sin(phi), z);
+            Vec3f d(s * std::cos(phi), s * std::sin(phi), z);
+            if (axis_aligned) {
+                const int axis = int(3.f * u()) % 3;
+                d = Vec3f(0.f);
+                d[axis] = u() < 0.5f ? 1.f : -1.f;
+                for (int a = 0; a < 3; ++a) {
+                    const float which = u();
+                    if (a == axis || which < 0.2f) continue;
+                    // A block plane (every 8 voxels) or a voxel-centre plane.
+                    const float k = std::floor(u() * res[a]);
+                    const float voxel = which < 0.6f ? 8.f * std::floor(k / 8.f) : k + 0.5f;
+                    o[a] = lo[a] + size[a] * voxel / res[a];
+                }
+            }
             const float tmin = u() < 0.3f ? 0.f : 2.f * u();
             const float tmax = u() < 0.2f ? Infinity : tmin + 8.f * u();
             float expected_start = tmin;
