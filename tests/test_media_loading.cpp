@@ -246,7 +246,12 @@ TEST(MediaLoading, MalformedVolFilesGiveOneClearError) {
         {with(20, 2), "invalid channel count 2 (expected 1 or 3)"},
         {with(8, 0), "invalid resolution 0 x 2 x 4"},
         {with(12, -5), "invalid resolution 3 x -5 x 4"},
-        {with(8, 1 << 30), "truncated: the header declares 1073741824 x 2 x 4 x 1"},
+        {with(8, 1 << 30), "truncated: the header declares 1073741824 x 2 x 4 x 1 = 8589934592 values"},
+        {with(12, 1 << 30)
+             .replace(8, 4, with(8, 1 << 30).substr(8, 4))
+             .replace(16, 4, with(16, 1 << 30).substr(16, 4)),
+         "truncated: the header declares 1073741824 x 1073741824 x 1073741824 x 1 = "
+         "1237940039285380274899124224 values"},
         {good.substr(0, good.size() - 4),
          "truncated: the header declares 3 x 2 x 4 x 1 = 24 values, the file holds 23"},
         {good + "abcd", "size mismatch: 4 bytes after the 3 x 2 x 4 x 1 values"},

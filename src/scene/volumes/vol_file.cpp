@@ -7,6 +7,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 
@@ -56,14 +57,18 @@ VolumeGridData read_vol_file(const std::string& path) {
         throw VolumeFileError("invalid channel count " + std::to_string(channels) + " (expected 1 or 3)");
     grid.channels = channels;
 
-    const uint64_t count =
-        uint64_t(grid.res.x) * uint64_t(grid.res.y) * uint64_t(grid.res.z) * uint64_t(channels);
-    const uint64_t data_bytes = file_size - HeaderBytes;
+    const uint64_t data_bytes = file_size - HeaderBytes, held = data_bytes / sizeof(float);
     const std::string shape = std::to_string(grid.res.x) + " x " + std::to_string(grid.res.y) + " x " +
                               std::to_string(grid.res.z) + " x " + std::to_string(channels);
-    if (data_bytes < count * sizeof(float))
-        throw VolumeFileError("truncated: the header declares " + shape + " = " + std::to_string(count) +
-                              " values, the file holds " + std::to_string(data_bytes / sizeof(float)));
+    // The declared count in long double: up to 2^93, beyond uint64_t.
+    const long double declared = static_cast<long double>(grid.res.x) * grid.res.y * grid.res.z * channels;
+    if (declared > static_cast<long double>(held)) {
+        char count_text[64];
+        std::snprintf(count_text, sizeof(count_text), "%.0Lf", declared);
+        throw VolumeFileError("truncated: the header declares " + shape + " = " + count_text +
+                              " values, the file holds " + std::to_string(held));
+    }
+    const uint64_t count = uint64_t(declared);
     if (data_bytes > count * sizeof(float))
         throw VolumeFileError("size mismatch: " + std::to_string(data_bytes - count * sizeof(float)) +
                               " bytes after the " + shape + " values the header declares");
