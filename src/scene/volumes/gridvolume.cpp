@@ -52,7 +52,6 @@ GridVolume::GridVolume(VolumeGridData grid, const Transform& unit_to_world, Filt
 void GridVolume::build_block_maxima() {
     for (int a = 0; a < 3; ++a)
         blocks_[a] = (res_[a] + BlockSize - 1) / BlockSize;
-    block_max_.assign(size_t(blocks_.x) * size_t(blocks_.y) * size_t(blocks_.z), 0.f);
     // Maxima over x-ranges first, then y, then z (separable).
     auto range_max = [&](const std::vector<float>& in, Vec3i in_res, int axis, Vec3i out_res) {
         std::vector<float> out(size_t(out_res.x) * size_t(out_res.y) * size_t(out_res.z), 0.f);
