@@ -7,6 +7,8 @@
 // phase "isotropic":      no parameters
 // phase "hg":             g (float, 0.8), Henyey-Greenstein asymmetry in (-1, 1)
 // volume "constvolume":   value (float/spectrum, 1)
+// medium "heterogeneous" and volume "gridvolume" (alias "grid"): scene/heterogeneous.cpp,
+// scene/volumes/gridvolume.cpp.
 #include "scene/media_loading.h"
 
 #include "core/warp.h"
@@ -120,7 +122,7 @@ std::shared_ptr<Object> make_medium(const Properties& props, const LoadContext& 
 
 std::shared_ptr<Object> make_volume(const Properties& props, const LoadContext& ctx) {
     if (props.plugin() == "constvolume") return std::make_shared<ConstVolume>(props.get_color("value", Color3f(1.f)));
-    if (props.plugin() == "gridvolume") return make_gridvolume(props, ctx);
+    if (props.plugin() == "gridvolume" || props.plugin() == "grid") return make_gridvolume(props, ctx);
     throw_unsupported_plugin(props, ObjectKind::Volume);
 }
 

@@ -6,6 +6,8 @@
 #include "core/transform.h"
 #include "scene/object.h"
 
+#include <functional>
+
 namespace penumbra {
 
 // An axis-aligned box in world space (empty when lo > hi).
@@ -26,11 +28,21 @@ class Volume : public Object {
 #undef PENUMBRA_VOLUME_METHODS
     // The largest channel value anywhere (a majorant of every channel).
     virtual float max() const = 0;
+    // The smallest channel value anywhere (loaders reject grids that would give a negative extinction).
+    virtual float min() const = 0;
     // A bound of every channel's value over the world-space segment o + t d, t in [t0, t1] (grids refine it
     // with a coarse grid of maxima; the default is max()).
     virtual float max_along(const Vec3f& o, const Vec3f& d, float t0, float t1) const {
         (void)o, (void)d, (void)t0, (void)t1;
         return max();
+    }
+    // Piecewise-constant bounds along o + t d over [t0, t1): calls f(s0, s1, bound) for consecutive segments
+    // covering the interval, in order, with bound >= every channel's value on [s0, s1); stops when f returns
+    // false. Grids report one segment per block of their coarse grid of maxima; the default is one segment.
+    using BoundVisitor = std::function<bool(float s0, float s1, float bound)>;
+    virtual void max_segments(const Vec3f& o, const Vec3f& d, float t0, float t1,
+                              const BoundVisitor& f) const {
+        if (t0 < t1) f(t0, t1, max_along(o, d, t0, t1));
     }
     // World-space support outside which the value is that of the nearest boundary texel (grids) or the
     // constant (constvolume: an invalid box, meaning everywhere).
@@ -57,6 +69,7 @@ class ConstVolume : public VolumeBase<ConstVolume> {
         return param_color<T>(value, param_index);
     }
     float max() const override { return max_component(value); }
+    float min() const override { return min_component(value); }
     bool is_constant() const override { return true; }
     void traverse(ParamVisitor& v) override { v.put("value", &value.x, 3, &param_index); }
     Color3f value;
