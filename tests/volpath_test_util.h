@@ -1,0 +1,108 @@
+// Scenes and statistics shared by the volumetric integrator tests: independent renders (different seeds) give
+// per-batch image means and 4x4-pixel block means, whose spread gives the standard errors every tolerance
+// derives from (ptracer splats correlate neighbouring pixels, so blocks are compared, not pixels).
+#pragma once
+#include "render/render.h"
+#include "scene/scene.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace penumbra::test {
+
+inline std::string vp_sensor(const std::string& transform, int res, const std::string& extra = "",
+                             const std::string& type = "perspective") {
+    return "<sensor type=\"" + type + "\">" + extra + "<transform name=\"to_world\">" + transform +
+           "</transform><sampler type=\"independent\"><integer name=\"sample_count\" value=\"4\"/></sampler>"
+           "<film type=\"hdrfilm\"><integer name=\"width\" value=\"" + std::to_string(res) +
+           "\"/><integer name=\"height\" value=\"" + std::to_string(res) + "\"/><rfilter type=\"box\"/></film></sensor>";
+}
+
+inline std::string vp_integrator(const std::string& type, const std::string& extra = "") {
+    return "<integrator type=\"" + type + "\">" + extra + "</integrator>";
+}
+
+// Per-batch statistics: image means and block means (per channel), their mean and standard error.
+struct BlockStats {
+    int blocks_x = 0, blocks_y = 0;
+    std::vector<double> mean, stderr_; // index (by * blocks_x + bx) * 3 + c; the last 3 entries: image mean
+    double pixel_variance = 0;          // per-sample-batch pixel variance averaged over pixels and channels
+};
+
+inline BlockStats block_stats(const Scene& scene, int batches, int spp, uint64_t seed0, int block = 4) {
+    const int w = scene.sensor->film->width, h = scene.sensor->film->height;
+    BlockStats s;
+    s.blocks_x = w / block;
+    s.blocks_y = h / block;
+    const size_t n = size_t(s.blocks_x * s.blocks_y + 1) * 3;
+    std::vector<double> sum(n, 0.0), sum2(n, 0.0);
+    std::vector<double> pix(size_t(w) * h * 3, 0.0), pix2(size_t(w) * h * 3, 0.0);
+    for (int b = 0; b < batches; ++b) {
+        RenderOptions opt;
+        opt.spp = spp;
+        opt.seed = seed0 + uint64_t(b) * 7919;
+        const Image im = render(scene, opt);
+        std::vector<double> v(n, 0.0);
+        for (int y = 0; y < s.blocks_y * block; ++y)
+            for (int x = 0; x < s.blocks_x * block; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    const double p = im.at(x, y)[c];
+                    v[size_t((y / block) * s.blocks_x + x / block) * 3 + c] += p / (block * block);
+                    v[n - 3 + c] += p / (double(s.blocks_x * block) * s.blocks_y * block);
+                    const size_t i = (size_t(y) * w + x) * 3 + c;
+                    pix[i] += p;
+                    pix2[i] += p * p;
+                }
+        for (size_t i = 0; i < n; ++i) {
+            sum[i] += v[i];
+            sum2[i] += v[i] * v[i];
+        }
+    }
+    s.mean.resize(n);
+    s.stderr_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        s.mean[i] = sum[i] / batches;
+        const double var = std::max(0.0, (sum2[i] / batches - s.mean[i] * s.mean[i]) * batches / (batches - 1));
+        s.stderr_[i] = std::sqrt(var / batches);
+    }
+    double var_sum = 0;
+    for (size_t i = 0; i < pix.size(); ++i) {
+        const double m = pix[i] / batches;
+        var_sum += std::max(0.0, (pix2[i] / batches - m * m) * batches / (batches - 1));
+    }
+    s.pixel_variance = var_sum / pix.size();
+    return s;
+}
+
+// Agreement of two estimators: |z| of the image mean below 4, and at most one block channel beyond |z| = 4 (with
+// 15 degrees of freedom P(|t| > 4) ~ 1.2e-3 per entry: ~0.1 expected among ~100 entries if both are unbiased).
+// Entries whose standard error is zero on both sides must agree to 1e-6. Returns the largest block |z|.
+inline double expect_agreement(const BlockStats& a, const BlockStats& b, const std::string& what) {
+    const size_t n = a.mean.size();
+    EXPECT_EQ(n, b.mean.size());
+    double max_z = 0;
+    int outliers = 0;
+    for (size_t i = 0; i + 3 < n; ++i) {
+        const double se = std::hypot(a.stderr_[i], b.stderr_[i]);
+        const double d = std::abs(a.mean[i] - b.mean[i]);
+        const double z = se > 0 ? d / se : (d > 1e-6 ? INFINITY : 0.0);
+        max_z = std::max(max_z, z);
+        if (z > 4.0) ++outliers;
+    }
+    for (int c = 0; c < 3; ++c) {
+        const size_t i = n - 3 + c;
+        const double z = (a.mean[i] - b.mean[i]) / std::hypot(a.stderr_[i], b.stderr_[i]);
+        EXPECT_LT(std::abs(z), 4.0) << what << " channel " << c << ": image mean " << a.mean[i] << " vs "
+                                    << b.mean[i];
+        std::printf("[ %s ] image mean z (channel %d) = %+.2f\n", what.c_str(), c, z);
+    }
+    EXPECT_LE(outliers, 1) << what << ": block channels beyond 4 standard errors";
+    std::printf("[ %s ] max block |z| = %.2f over %zu block channels, %d beyond 4\n", what.c_str(), max_z, n - 3,
+                outliers);
+    return max_z;
+}
+
+} // namespace penumbra::test
