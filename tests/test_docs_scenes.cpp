@@ -87,8 +87,7 @@ const DocScene kScenes[] = {
     {"integrator_direct_bsdf.xml", "", ""},
     {"integrator_direct_lum.xml", "", ""},
     {"integrator_stokes_cbox.xml", "integrator", "stokes"},
-    {"medium_homogeneous_sss.xml", "integrator",
-     "volpath"}, // the medium loads; its volpath integrator does not
+    {"medium_homogeneous_sss.xml", "", ""},
     {"medium_homogeneous_sss_textured.xml", "volume", "gridvolume"},
     {"sampler_independent_16spp.xml", "", ""},
     {"sampler_independent_25spp.xml", "", ""},

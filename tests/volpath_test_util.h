@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -77,20 +78,27 @@ inline BlockStats block_stats(const Scene& scene, int batches, int spp, uint64_t
     return s;
 }
 
-// Agreement of two estimators: |z| of the image mean below 4, and at most one block channel beyond |z| = 4 (with
-// 15 degrees of freedom P(|t| > 4) ~ 1.2e-3 per entry: ~0.1 expected among ~100 entries if both are unbiased).
+// Agreement of two estimators: |z| of the image mean below 4, and at most one block with a channel beyond |z| = 4
+// (with 15 degrees of freedom P(|t| > 4) ~ 1.2e-3 per entry: ~0.1 expected among ~100 entries if both are
+// unbiased; blocks, not channels, are counted because grey scenes correlate the channels of a block).
 // Entries whose standard error is zero on both sides must agree to 1e-6. Returns the largest block |z|.
 inline double expect_agreement(const BlockStats& a, const BlockStats& b, const std::string& what) {
     const size_t n = a.mean.size();
     EXPECT_EQ(n, b.mean.size());
     double max_z = 0;
-    int outliers = 0;
+    int outliers = 0, outlier_block = -1;
     for (size_t i = 0; i + 3 < n; ++i) {
         const double se = std::hypot(a.stderr_[i], b.stderr_[i]);
         const double d = std::abs(a.mean[i] - b.mean[i]);
         const double z = se > 0 ? d / se : (d > 1e-6 ? INFINITY : 0.0);
         max_z = std::max(max_z, z);
-        if (z > 4.0) ++outliers;
+        if (z > 4.0 && int(i / 3) != outlier_block) {
+            ++outliers;
+            outlier_block = int(i / 3);
+        }
+        if (z > 3.5 && std::getenv("VP_VERBOSE"))
+            std::printf("block %zu channel %zu: %.5f +- %.5f vs %.5f +- %.5f\n", i / 3, i % 3, a.mean[i], a.stderr_[i],
+                        b.mean[i], b.stderr_[i]);
     }
     for (int c = 0; c < 3; ++c) {
         const size_t i = n - 3 + c;
@@ -99,9 +107,9 @@ inline double expect_agreement(const BlockStats& a, const BlockStats& b, const s
                                     << b.mean[i];
         std::printf("[ %s ] image mean z (channel %d) = %+.2f\n", what.c_str(), c, z);
     }
-    EXPECT_LE(outliers, 1) << what << ": block channels beyond 4 standard errors";
-    std::printf("[ %s ] max block |z| = %.2f over %zu block channels, %d beyond 4\n", what.c_str(), max_z, n - 3,
-                outliers);
+    EXPECT_LE(outliers, 1) << what << ": blocks beyond 4 standard errors";
+    std::printf("[ %s ] max block |z| = %.2f over %zu block channels, %d blocks beyond 4\n", what.c_str(), max_z,
+                n - 3, outliers);
     return max_z;
 }
 

@@ -190,6 +190,9 @@ Color3<T> trace_volpath(const Scene& scene, Sampler& sampler, const Ray& primary
         ray = si.spawn_ray(d);
         ++rays.rays;
         if (null) {
+            // Next-event estimation crosses pure null surfaces only (segment_transmittance): beyond the null lobe
+            // of any other BSDF (mask, blends) it saw nothing, so emission found from here on takes weight 1.
+            if (bsdf->flags() != BSDFNull) s.last_unweighted = true;
             s.travelled += si.t;
             continue;
         }
