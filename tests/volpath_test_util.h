@@ -30,7 +30,8 @@ inline std::string vp_integrator(const std::string& type, const std::string& ext
 struct BlockStats {
     int blocks_x = 0, blocks_y = 0;
     std::vector<double> mean, stderr_; // index (by * blocks_x + bx) * 3 + c; the last 3 entries: image mean
-    double pixel_variance = 0;          // per-sample-batch pixel variance averaged over pixels and channels
+    double pixel_variance = 0;          // per-render pixel variance averaged over pixels and channels
+    double channel_variance[3] = {0, 0, 0}; // the same per channel
 };
 
 inline BlockStats block_stats(const Scene& scene, int batches, int spp, uint64_t seed0, int block = 4) {
@@ -69,12 +70,12 @@ inline BlockStats block_stats(const Scene& scene, int batches, int spp, uint64_t
         const double var = std::max(0.0, (sum2[i] / batches - s.mean[i] * s.mean[i]) * batches / (batches - 1));
         s.stderr_[i] = std::sqrt(var / batches);
     }
-    double var_sum = 0;
     for (size_t i = 0; i < pix.size(); ++i) {
         const double m = pix[i] / batches;
-        var_sum += std::max(0.0, (pix2[i] / batches - m * m) * batches / (batches - 1));
+        s.channel_variance[i % 3] +=
+            std::max(0.0, (pix2[i] / batches - m * m) * batches / (batches - 1)) / (pix.size() / 3);
     }
-    s.pixel_variance = var_sum / pix.size();
+    s.pixel_variance = (s.channel_variance[0] + s.channel_variance[1] + s.channel_variance[2]) / 3;
     return s;
 }
 
@@ -97,7 +98,7 @@ inline double expect_agreement(const BlockStats& a, const BlockStats& b, const s
             outlier_block = int(i / 3);
         }
         if (z > 3.5 && std::getenv("VP_VERBOSE"))
-            std::printf("block %zu channel %zu: %.5f +- %.5f vs %.5f +- %.5f\n", i / 3, i % 3, a.mean[i], a.stderr_[i],
+            std::printf("block %zu channel %zu: %.3e +- %.3e vs %.3e +- %.3e\n", i / 3, i % 3, a.mean[i], a.stderr_[i],
                         b.mean[i], b.stderr_[i]);
     }
     for (int c = 0; c < 3; ++c) {
