@@ -1,5 +1,9 @@
 // `ptracer`: light tracing. Paths start on emitters and every vertex is connected to the camera
-// (Mitsuba 3's `ptracer`).
+// (Mitsuba 3's `ptracer`), through participating media: light paths scatter in media (free-flight and phase
+// sampling, render/medium_sampling.h), start in the emitter's medium (render/light_medium.h states the rule),
+// and every connection to the camera carries the transmittance of its segment through media and null
+// boundaries (segment_transmittance), with the phase function at medium vertices. As in volpath, crossing a
+// null lobe is not a bounce for max_depth (Mitsuba's ptracer, which has no media, counts it).
 //
 // | parameter      | type    | default | meaning                                                    |
 // |----------------|---------|---------|------------------------------------------------------------|
