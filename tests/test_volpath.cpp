@@ -180,6 +180,33 @@ TEST(VolPath, ImagesAreIdenticalWhateverTheThreadCount) {
     }
 }
 
+// A point light nesting its medium (Mitsuba's `medium` child of emitters) in a haze box: ptracer starts its light
+// paths in the declared medium, the same one the walk from the sensor finds without it (render/light_medium.h),
+// so the image is the same bit for bit; nesting another medium changes it; a second nested medium is a load
+// error.
+TEST(VolPath, PointLightNestsItsMedium) {
+    auto make = [](const std::string& nested) {
+        return load_scene_string(
+            "<scene version=\"3.0.0\">" + vp_integrator("ptracer") +
+            "<medium type=\"homogeneous\" id=\"haze\"><float name=\"sigma_t\" value=\"0.5\"/></medium>"
+            "<medium type=\"homogeneous\" id=\"smoke\"><float name=\"sigma_t\" value=\"3\"/></medium>" +
+            vp_sensor("<lookat origin=\"0,0,5\" target=\"0,0,0\" up=\"0,1,0\"/>", 8) +
+            "<shape type=\"cube\"><bsdf type=\"null\"/><ref name=\"interior\" id=\"haze\"/></shape>"
+            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/><translate value=\"0,0,-1.5\"/>"
+            "</transform></shape><emitter type=\"point\"><point name=\"position\" value=\"0.2,0.3,0\"/>" +
+            nested + "</emitter></scene>");
+    };
+    RenderOptions opt;
+    opt.spp = 4;
+    const Image walked = render(*make(""), opt), nested = render(*make("<ref id=\"haze\"/>"), opt);
+    EXPECT_EQ(walked.pixels, nested.pixels);
+    EXPECT_NE(render(*make("<ref id=\"smoke\"/>"), opt).pixels, walked.pixels);
+    double sum = 0;
+    for (const Color3f& p : walked.pixels) sum += p.x;
+    EXPECT_GT(sum, 0.0);
+    EXPECT_THROW(make("<ref id=\"haze\"/><ref id=\"haze\"/>"), LoadError);
+}
+
 // Mitsuba's documentation scene for the homogeneous medium (a bunny of dense, forward-scattering medium behind
 // a rough dielectric, sample_emitters off) renders with volpath: a 16x12 crop of the frame's centre at 2 spp.
 TEST(VolPath, MitsubaHomogeneousSSSDocScene) {

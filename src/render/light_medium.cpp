@@ -33,6 +33,7 @@ const Medium* medium_at(const Scene& scene, const Vec3f& x, RayCounter& rays) {
 }
 
 const Medium* emitter_medium(const Scene& scene, const Emitter& emitter, const Vec3f& origin, RayCounter& rays) {
+    if (emitter.medium) return emitter.medium.get();
     const Shape* shape = emitter.shape();
     if (shape && (shape->interior || shape->exterior)) return shape->exterior.get();
     return medium_at(scene, origin, rays);

@@ -1,11 +1,12 @@
 // The medium a light path starts in (light tracing and bidirectional estimators).
 //
-// Rule: an area emitter on a shape that declares media emits into the medium on its emitting side, which is the
-// side its normal points to: the shape's exterior (target_medium, Mitsuba's rule). Any other emitter (point, spot, projector, an area light on a shape without
-// media, the rays of infinite emitters, which start outside the scene) sits in the medium found by walking the
-// straight segment from the sensor's position to the ray origin, starting in the sensor's medium and applying
-// target_medium at every surface crossed whatever its BSDF. This needs no `medium` child on emitters and agrees
-// with the media the camera sees as long as the shapes' interior/exterior declarations are consistent.
+// Rule: an emitter that nests a medium (Mitsuba's `medium` child of emitters) sits in it. Otherwise an area
+// emitter on a shape that declares media emits into the medium on its emitting side, the side its normal points
+// to: the shape's exterior (target_medium, Mitsuba's rule). Any other emitter (point, spot, projector, an area
+// light on a shape without media, the rays of infinite emitters, which start outside the scene) sits in the
+// medium found by walking the straight segment from the sensor's position to the ray origin, starting in the
+// sensor's medium and applying target_medium at every surface crossed whatever its BSDF. The walk agrees with
+// the media the camera sees as long as the shapes' interior/exterior declarations are consistent.
 #pragma once
 #include "render/integrator.h"
 #include "scene/scene.h"

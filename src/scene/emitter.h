@@ -5,10 +5,12 @@
 #include "scene/interaction.h"
 #include "scene/object.h"
 
+#include <memory>
 #include <utility>
 
 namespace penumbra {
 
+class Medium;
 class Shape;
 struct TriangleMesh;
 struct BoundingSphere {
@@ -66,6 +68,9 @@ public:
     virtual void set_to_world(const Transform&) {}
     // Total emitted power estimate (used to report; emitters are selected uniformly as in Mitsuba 3).
     virtual Color3f power() const { return Color3f(0.f); }
+    // The medium the emitter sits in (Mitsuba's nested `medium`), or null if not declared
+    // (render/light_medium.h then infers it).
+    std::shared_ptr<Medium> medium;
 
 protected:
     uint32_t flags_ = 0;

@@ -1,6 +1,7 @@
 // make_emitter: Mitsuba 3 emitter plugins by `type`, and the helpers shared by the plugins. Each maker lives
 // in the plugin's own file.
 #include "scene/emitters/emitters.h"
+#include "scene/medium.h"
 
 namespace penumbra {
 
@@ -29,7 +30,9 @@ DirectionSample3f delta_position_sample(const Emitter* emitter, const Vec3f& pos
     return ds;
 }
 
-std::shared_ptr<Object> make_emitter(const Properties& props, const LoadContext& ctx) {
+namespace {
+
+std::shared_ptr<Emitter> make_emitter_of_type(const Properties& props, const LoadContext& ctx) {
     const std::string& type = props.plugin();
     if (type == "area") return make_area_emitter(props);
     if (type == "point") return make_point_emitter(props);
@@ -39,6 +42,17 @@ std::shared_ptr<Object> make_emitter(const Properties& props, const LoadContext&
     if (type == "constant") return make_constant_emitter(props);
     if (type == "envmap") return make_envmap_emitter(props, ctx);
     throw_unsupported_plugin(props, ObjectKind::Emitter);
+}
+
+} // namespace
+
+// Any emitter may nest one medium (Mitsuba's `medium` child: the medium it sits in).
+std::shared_ptr<Object> make_emitter(const Properties& props, const LoadContext& ctx) {
+    const auto media = props.objects(ObjectKind::Medium);
+    if (media.size() > 1) throw LoadError(media[1]->location, props.plugin() + ": more than one medium given");
+    std::shared_ptr<Emitter> emitter = make_emitter_of_type(props, ctx);
+    if (!media.empty()) emitter->medium = std::static_pointer_cast<Medium>(media[0]);
+    return emitter;
 }
 
 } // namespace penumbra
