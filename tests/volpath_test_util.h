@@ -82,13 +82,15 @@ inline BlockStats block_stats(const Scene& scene, int batches, int spp, uint64_t
 // Agreement of two estimators: |z| of the image mean below 4, and at most one block with a channel beyond |z| = 4
 // (with 15 degrees of freedom P(|t| > 4) ~ 1.2e-3 per entry: ~0.1 expected among ~100 entries if both are
 // unbiased; blocks, not channels, are counted because grey scenes correlate the channels of a block).
-// Entries whose standard error is zero on both sides must agree to 1e-6. Returns the largest block |z|.
-inline double expect_agreement(const BlockStats& a, const BlockStats& b, const std::string& what) {
+// Entries whose standard error is zero on both sides must agree to 1e-6. `channel` >= 0 compares that channel
+// only. Returns the largest block |z|.
+inline double expect_agreement(const BlockStats& a, const BlockStats& b, const std::string& what, int channel = -1) {
     const size_t n = a.mean.size();
     EXPECT_EQ(n, b.mean.size());
     double max_z = 0;
     int outliers = 0, outlier_block = -1;
     for (size_t i = 0; i + 3 < n; ++i) {
+        if (channel >= 0 && int(i % 3) != channel) continue;
         const double se = std::hypot(a.stderr_[i], b.stderr_[i]);
         const double d = std::abs(a.mean[i] - b.mean[i]);
         const double z = se > 0 ? d / se : (d > 1e-6 ? INFINITY : 0.0);
@@ -102,6 +104,7 @@ inline double expect_agreement(const BlockStats& a, const BlockStats& b, const s
                         b.mean[i], b.stderr_[i]);
     }
     for (int c = 0; c < 3; ++c) {
+        if (channel >= 0 && c != channel) continue;
         const size_t i = n - 3 + c;
         const double z = (a.mean[i] - b.mean[i]) / std::hypot(a.stderr_[i], b.stderr_[i]);
         EXPECT_LT(std::abs(z), 4.0) << what << " channel " << c << ": image mean " << a.mean[i] << " vs "
@@ -110,7 +113,7 @@ inline double expect_agreement(const BlockStats& a, const BlockStats& b, const s
     }
     EXPECT_LE(outliers, 1) << what << ": blocks beyond 4 standard errors";
     std::printf("[ %s ] max block |z| = %.2f over %zu block channels, %d blocks beyond 4\n", what.c_str(), max_z,
-                n - 3, outliers);
+                channel >= 0 ? (n - 3) / 3 : n - 3, outliers);
     return max_z;
 }
 
