@@ -42,8 +42,9 @@ const std::string kAreaLight =
     "</emitter></shape>";
 
 // A box of scattering medium behind a null boundary on the floor, lit by an area light; camera in vacuum.
-std::string medium_box(const std::string& integrator) {
-    return "<scene version=\"3.0.0\">" + vp_integrator(integrator) + haze("fog", "2", "0.8", 0.3f) + camera() +
+std::string medium_box(const std::string& integrator, int max_depth = -1) {
+    return "<scene version=\"3.0.0\">" +
+           vp_integrator(integrator, "<integer name=\"max_depth\" value=\"" + std::to_string(max_depth) + "\"/>") + haze("fog", "2", "0.8", 0.3f) + camera() +
            kFloor + kAreaLight +
            "<shape type=\"cube\"><transform name=\"to_world\"><scale value=\"0.5\"/><translate value=\"0,0.52,0\"/>"
            "</transform><bsdf type=\"null\"/><ref name=\"interior\" id=\"fog\"/></shape></scene>";
@@ -138,7 +139,15 @@ void compare(const std::string& what, const std::function<std::string(const std:
 } // namespace
 
 TEST(VolPathAgreement, NullBoundedMediumBoxAreaLight) {
-    compare("medium box", medium_box, "volpath", 16, "ptracer", 32);
+    compare("medium box", [](const std::string& i) { return medium_box(i); }, "volpath", 16, "ptracer", 32);
+}
+
+// max_depth counts scattering vertices, surface and medium alike, never null crossings, in both estimators:
+// direct lighting and single scattering only (2), and one more bounce (3).
+TEST(VolPathAgreement, MaxDepthInMedia) {
+    for (int depth : {2, 3})
+        compare("medium box, max_depth " + std::to_string(depth),
+                [depth](const std::string& i) { return medium_box(i, depth); }, "volpath", 16, "ptracer", 32);
 }
 
 TEST(VolPathAgreement, PointLightInHaze) {
