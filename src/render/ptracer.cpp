@@ -1,5 +1,9 @@
 // `ptracer`: light tracing. Paths start on emitters and every vertex is connected to the camera
-// (Mitsuba 3's `ptracer`).
+// (Mitsuba 3's `ptracer`), through participating media: light paths scatter in media (free-flight and phase
+// sampling, render/medium_sampling.h), start in the emitter's medium (render/light_medium.h states the rule),
+// and every connection to the camera carries the transmittance of its segment through media and null
+// boundaries (segment_transmittance), with the phase function at medium vertices. As in volpath, crossing a
+// null lobe is not a bounce for max_depth (Mitsuba's ptracer, which has no media, counts it).
 //
 // | parameter      | type    | default | meaning                                                    |
 // |----------------|---------|---------|------------------------------------------------------------|
@@ -11,6 +15,9 @@
 #include "core/interrupt.h"
 #include "render/adjoint_shading.h"
 #include "render/film_footprint.h"
+#include "render/light_medium.h"
+#include "render/medium_sampling.h"
+#include "render/volume_visibility.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -21,6 +28,18 @@
 
 namespace penumbra {
 
+namespace {
+
+// Russian roulette on the light path (survival probability min(max(throughput), 0.95)).
+bool survives_roulette(Color3f& throughput, Sampler& sampler) {
+    const float q = std::min(max_component(throughput), 0.95f);
+    if (sampler.next_1d() >= q) return false;
+    throughput /= q;
+    return true;
+}
+
+} // namespace
+
 ParticleTracer::ParticleTracer(const Properties& props) {
     max_depth_ = int(props.get_int("max_depth", -1));
     rr_depth_ = int(props.get_int("rr_depth", 5));
@@ -29,12 +48,25 @@ ParticleTracer::ParticleTracer(const Properties& props) {
     if (rr_depth_ <= 0) props.raise("rr_depth", "must be positive");
 }
 
-void ParticleTracer::trace(const Scene& scene, Sampler& sampler, Image& image, RayCounter& rays) const {
+void ParticleTracer::trace(const Scene& scene, bool media, Sampler& sampler, Image& image, RayCounter& rays) const {
     const BSDFContext ctx{TransportMode::Importance};
     const Sensor& sensor = *scene.sensor;
     const Film& film = *sensor.film;
     auto splat = [&](const Vec2f& pos, const Color3f& value) {
         for_each_pixel_in_footprint(film, pos, [&](int x, int y, float w) { image.at(x, y) += value * w; });
+    };
+    // Connects vertex `ref` (on `shape`, or in `medium` when shape is null) to the sensor and splats
+    // throughput · f · W_e / p · Tr, with f(w) the BSDF or phase function toward the camera; the connection
+    // starts in the medium on the camera's side of the surface.
+    auto connect = [&](const Interaction3f& ref, const Shape* shape, const Medium* medium,
+                       const Color3f& throughput, auto&& f) {
+        const auto [sds, sw] = sensor.sample_direction(ref, sampler.next_2d());
+        if (is_black(sw)) return;
+        const Color3f value = throughput * f(sds.d) * sw;
+        if (is_black(value)) return;
+        if (shape) medium = target_medium(*shape, ref.n, sds.d, medium);
+        const Color3f tr = segment_transmittance(scene, ref.spawn_ray_to(sds.p), medium, sampler, rays);
+        if (!is_black(tr)) splat(sds.uv, value * tr);
     };
     const unsigned max_depth = unsigned(max_depth_);
     if (max_depth_ == 0 || scene.emitters.empty()) return;
@@ -42,9 +74,9 @@ void ParticleTracer::trace(const Scene& scene, Sampler& sampler, Image& image, R
     float u_sel = sampler.next_1d(), pdf_sel = 0.f;
     const Emitter* emitter = scene.sample_emitter(u_sel, pdf_sel);
 
-    // Depth 1: the emitter seen directly by the camera, I = ∫ W_e L_e |cos θ_x| / d² dA (area emitters only:
+    // Depth 1: the emitter seen directly by the camera, I = ∫ W_e L_e Tr |cos θ_x| / d² dA (area emitters only:
     // point and directional emitters occupy no area on the film).
-    const Vec2f u_pos = sampler.next_2d(), u_sensor = sampler.next_2d();
+    const Vec2f u_pos = sampler.next_2d();
     if (!hide_emitters_ && emitter->shape()) {
         const PositionSample3f ps = emitter->shape()->sample_position(u_pos);
         SurfaceInteraction3f si;
@@ -53,52 +85,77 @@ void ParticleTracer::trace(const Scene& scene, Sampler& sampler, Image& image, R
         si.sh_frame = Frame3f(ps.n);
         si.uv = ps.uv;
         si.shape = emitter->shape();
-        const auto [sds, sw] = sensor.sample_direction(si, u_sensor);
-        ++rays.rays;
-        if (!is_black(sw) && !scene.occluded(si.spawn_ray_to(sds.p))) {
-            si.wi = si.to_local(sds.d); // toward the camera
-            const Color3f Le = emitter->eval(si);
-            const float cos_x = std::abs(dot(ps.n, sds.d));
-            splat(sds.uv, Le * sw * (cos_x / (ps.pdf * pdf_sel)));
-        }
+        const Medium* medium = media ? emitter_medium(scene, *emitter, si.spawn_ray(ps.n).o, rays) : nullptr;
+        connect(si, si.shape, medium, Color3f(1.f / (ps.pdf * pdf_sel)), [&](const Vec3f& to_camera) {
+            si.wi = si.to_local(to_camera);
+            return emitter->eval(si) * std::abs(dot(ps.n, to_camera));
+        });
+    } else {
+        sampler.next_2d();
     }
 
     const Vec2f u_dir = sampler.next_2d();
     auto [ray, weight] = emitter->sample_ray(u_pos, u_dir);
     Color3f throughput = weight / pdf_sel;
+    const Medium* medium = media ? emitter_medium(scene, *emitter, ray.o, rays) : nullptr;
     ++rays.rays;
-    for (unsigned depth = 1;; ++depth) {
+    // depth: the segments of the light path up to the current vertex, null crossings excluded (as volpath);
+    // connecting a vertex to the camera makes a path of depth + 1 segments.
+    for (unsigned depth = 1;;) {
         if (is_black(throughput)) break;
         const SurfaceInteraction3f si = scene.intersect(ray);
+
+        if (medium) {
+            const FreeFlightSample ff =
+                sample_free_flight(*medium, ray.o, ray.d, si.is_valid() ? si.t : Infinity, sampler);
+            throughput *= ff.weight;
+            if (is_black(throughput)) break;
+            if (ff.event == FreeFlightSample::Event::Scattered) {
+                // A medium vertex: connect with the phase function (symmetric: the same in both directions).
+                const PhaseFunction& phase = *medium->phase;
+                const Vec3f wi = -ray.d;
+                Interaction3f mi;
+                mi.p = ff.p;
+                mi.t = 0.f;
+                if (depth + 1 <= max_depth)
+                    connect(mi, nullptr, medium, throughput,
+                            [&](const Vec3f& wo) { return Color3f(phase.eval<float>(wi, wo)); });
+                if (depth + 1 >= max_depth) break;
+                const auto [wo, pdf] = phase.sample(wi, sampler.next_2d());
+                if (!(pdf > 0.f)) break;
+                ray = Ray(ff.p, wo);
+                ++rays.rays;
+                if (depth >= unsigned(rr_depth_) && !survives_roulette(throughput, sampler)) break;
+                ++depth;
+                continue;
+            }
+        }
         if (!si.is_valid()) break;
         const BSDF* bsdf = si.bsdf();
         if (!bsdf) break;
 
-        // Connect to the camera: the full path has depth + 1 segments.
-        const Vec2f u_connect = sampler.next_2d();
+        // Connect to the camera through the medium on the camera's side of the surface.
         if (depth + 1 <= max_depth && bsdf->has(BSDFSmooth)) {
-            const auto [sds, sw] = sensor.sample_direction(si, u_connect);
-            ++rays.rays;
-            if (!is_black(sw) && !scene.occluded(si.spawn_ray_to(sds.p))) {
-                const Vec3f w_next = sds.d; // from si toward the camera
-                const Color3f f = bsdf->eval(ctx, si, si.to_local(w_next)) * adjoint_shading_correction(si, w_next);
-                splat(sds.uv, throughput * f * sw);
-            }
+            connect(si, si.shape, medium, throughput, [&](const Vec3f& w_next) {
+                return bsdf->eval(ctx, si, si.to_local(w_next)) * adjoint_shading_correction(si, w_next);
+            });
+        } else {
+            sampler.next_2d();
         }
-        if (depth + 1 >= max_depth) break;
 
         const float u1 = sampler.next_1d();
         const auto [bs, bsdf_weight] = bsdf->sample(ctx, si, u1, sampler.next_2d());
         if (is_black(bsdf_weight)) break;
+        const bool null = bs.sampled_type == BSDFNull;
+        if (!null && depth + 1 >= max_depth) break;
         const Vec3f d = si.to_world(bs.wo);
-        throughput *= bsdf_weight * adjoint_shading_correction(si, d);
+        throughput *= null ? bsdf_weight : bsdf_weight * adjoint_shading_correction(si, d);
+        medium = target_medium(*si.shape, si.n, d, medium);
         ray = si.spawn_ray(d);
         ++rays.rays;
-        if (depth >= unsigned(rr_depth_)) {
-            const float q = std::min(max_component(throughput), 0.95f);
-            if (sampler.next_1d() >= q) break;
-            throughput /= q;
-        }
+        if (null) continue;
+        if (depth >= unsigned(rr_depth_) && !survives_roulette(throughput, sampler)) break;
+        ++depth;
     }
 }
 
@@ -115,6 +172,7 @@ std::vector<Layer> ParticleTracer::render(const Scene& scene, const RenderOption
     const auto start = std::chrono::steady_clock::now();
     constexpr uint64_t batch = 4096;
 
+    const bool media = scene_has_media(scene);
     const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(threads);
     arena.execute([&] {
@@ -125,7 +183,7 @@ std::vector<Layer> ParticleTracer::render(const Scene& scene, const RenderOption
             for (uint64_t i = begin; i < end; ++i) {
                 if ((i & 1023) == 0) check_interrupt();
                 sampler.start(options.seed ^ 0x9e3779b97f4a7c15ULL, i, 0);
-                trace(scene, sampler, chunks[c], counter);
+                trace(scene, media, sampler, chunks[c], counter);
                 if ((i - begin + 1) % batch == 0 || i + 1 == end) {
                     const uint64_t total = done += ((i - begin) % batch) + 1;
                     if (options.progress) {

@@ -5,6 +5,7 @@
 #include "scene/interaction.h"
 #include "scene/object.h"
 
+#include <memory>
 #include <utility>
 
 namespace penumbra {
@@ -65,11 +66,11 @@ public:
     virtual bool movable() const { return false; }
     virtual Transform to_world() const { return {}; }
     virtual void set_to_world(const Transform&) {}
-    // The medium a point, spot or projector light sits in (Mitsuba's nested `medium` of an endpoint), or null;
-    // area lights emit into their shape's media (target_medium), infinite lights from outside the scene.
-    std::shared_ptr<Medium> medium;
     // Total emitted power estimate (used to report; emitters are selected uniformly as in Mitsuba 3).
     virtual Color3f power() const { return Color3f(0.f); }
+    // The medium the emitter sits in (Mitsuba's nested `medium`), or null if not declared
+    // (render/light_medium.h then infers it).
+    std::shared_ptr<Medium> medium;
 
 protected:
     uint32_t flags_ = 0;

@@ -1,7 +1,6 @@
 // make_emitter: Mitsuba 3 emitter plugins by `type`, and the helpers shared by the plugins. Each maker lives
 // in the plugin's own file.
 #include "scene/emitters/emitters.h"
-
 #include "scene/medium.h"
 
 namespace penumbra {
@@ -33,7 +32,7 @@ DirectionSample3f delta_position_sample(const Emitter* emitter, const Vec3f& pos
 
 namespace {
 
-std::shared_ptr<Object> make_emitter_of_type(const Properties& props, const LoadContext& ctx) {
+std::shared_ptr<Emitter> make_emitter_of_type(const Properties& props, const LoadContext& ctx) {
     const std::string& type = props.plugin();
     if (type == "area") return make_area_emitter(props);
     if (type == "point") return make_point_emitter(props);
@@ -47,18 +46,12 @@ std::shared_ptr<Object> make_emitter_of_type(const Properties& props, const Load
 
 } // namespace
 
-// Every emitter may nest one medium (Mitsuba's Endpoint); only lights at a point can use it.
+// Any emitter may nest one medium (Mitsuba's `medium` child: the medium it sits in).
 std::shared_ptr<Object> make_emitter(const Properties& props, const LoadContext& ctx) {
-    auto emitter = std::static_pointer_cast<Emitter>(make_emitter_of_type(props, ctx));
     const auto media = props.objects(ObjectKind::Medium);
     if (media.size() > 1) throw LoadError(media[1]->location, props.plugin() + ": more than one medium given");
-    if (!media.empty()) {
-        if (!(emitter->flags() & EmitterDeltaPosition))
-            throw LoadError(media[0]->location,
-                            props.plugin() + ": only point, spot and projector lights sit in a medium (area lights "
-                                             "emit into their shape's interior/exterior media)");
-        emitter->medium = std::static_pointer_cast<Medium>(media[0]);
-    }
+    std::shared_ptr<Emitter> emitter = make_emitter_of_type(props, ctx);
+    if (!media.empty()) emitter->medium = std::static_pointer_cast<Medium>(media[0]);
     return emitter;
 }
 
