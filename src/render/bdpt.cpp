@@ -10,7 +10,8 @@
 // | heuristic      | string  | power   | MIS weights: `power` (exponent 2) or `balance` heuristic          |
 //
 // Light tracing (t = 1) splats into the film like `ptracer`. Media attached to emitters are found from the
-// first surface declaring media along the emitted ray (the sensor's medium if none does). Media's
+// first surface declaring media along the emitted ray (vacuum if there is none, or the sensor's medium when
+// no shape declares media). Media's
 // `sample_emitters` is ignored: every strategy is always used.
 #include "render/bdpt.h"
 

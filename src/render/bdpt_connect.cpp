@@ -90,7 +90,7 @@ Color3f next_event(BDPTContext& ctx, const std::vector<PathVertex>& camera, int 
     light.d_env = ds.d;
     light.pdf_fwd = light_origin_density(ctx.scene, ds.emitter, light, pt);
     Strategy st{1, t, nullptr, &camera, &light, nullptr, ds.emitter};
-    if (!light.infinite) std::tie(st.ff_to_light, st.ff_to_camera) = connection_free_flight(ctx, pt, light, medium);
+    std::tie(st.ff_to_light, st.ff_to_camera) = connection_free_flight(ctx, pt, light, medium);
     return pt.beta * f * weight * tr * mis_weight(ctx, st);
 }
 

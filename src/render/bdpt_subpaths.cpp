@@ -43,8 +43,8 @@ bool crosses(const SurfaceInteraction3f& hit) {
     return bsdf && bsdf->flags() == BSDFNull;
 }
 
-// The medium at the start of `ray`: the near side of the first surface along it that declares media (the
-// sensor's medium if none does, as for camera rays that never meet a boundary).
+// The medium at the start of `ray`: the near side of the first surface along it that declares media. A ray
+// that meets none starts in vacuum, unless no shape declares media: the sensor's medium then fills space.
 const Medium* locate_medium(BDPTContext& ctx, Ray ray) {
     if (!ctx.has_media) return nullptr;
     for (int crossing = 0; crossing < 64; ++crossing) {
@@ -55,6 +55,8 @@ const Medium* locate_medium(BDPTContext& ctx, Ray ray) {
             return target_medium(*hit.shape, hit.n, -ray.d, static_cast<const Medium*>(nullptr));
         ray = hit.spawn_ray(ray.d);
     }
+    for (const auto& shape : ctx.scene.shapes)
+        if (shape->interior || shape->exterior) return nullptr;
     return sensor_medium(ctx.scene);
 }
 
