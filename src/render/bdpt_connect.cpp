@@ -5,6 +5,7 @@
 #include "render/film_footprint.h"
 #include "render/volume_visibility.h"
 
+#include <algorithm>
 #include <limits>
 
 namespace penumbra {
@@ -157,10 +158,11 @@ Color3f connect_subpaths(BDPTContext& ctx, const std::vector<PathVertex>& camera
     const int max_segments = settings.max_depth < 0 ? std::numeric_limits<int>::max() : settings.max_depth;
     const int n_camera = int(camera.size()), n_light = int(light.size());
     Color3f L(0.f);
+    // Next-event estimation (s = 1, t >= 2) uses its own emitter sample: it does not need the light subpath.
     for (int t = 1; t <= n_camera; ++t)
-        for (int s = 0; s <= n_light; ++s) {
+        for (int s = 0; s <= std::max(n_light, 1); ++s) {
             const int segments = s + t - 1;
-            if (segments < 1 || segments > max_segments || (t == 1 && s == 0)) continue;
+            if (segments < 1 || segments > max_segments || (t == 1 && (s == 0 || s > n_light))) continue;
             if (segments == 1 && settings.hide_emitters) continue;
             if (t == 1) light_tracing(ctx, light, s, splats);
             else if (s == 0) L += emission_hit(ctx, camera, t);

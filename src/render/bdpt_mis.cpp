@@ -1,6 +1,7 @@
 #include "render/bdpt_mis.h"
 
 #include <cmath>
+#include <vector>
 
 namespace penumbra {
 
@@ -17,15 +18,16 @@ float mis_weight(const BDPTContext& ctx, const Strategy& st) {
         const int j = n - 1 - i;
         return (j == 0 && st.camera_sample) ? *st.camera_sample : (*st.camera)[size_t(j)];
     };
-    constexpr int max_vertices = 64;
-    float from_light[max_vertices], from_camera[max_vertices];
-    bool delta[max_vertices];
-    if (n > max_vertices) return 0.f;
+    thread_local std::vector<float> from_light, from_camera;
+    thread_local std::vector<char> delta;
+    from_light.resize(size_t(n));
+    from_camera.resize(size_t(n));
+    delta.resize(size_t(n));
     for (int i = 0; i < n; ++i) {
         const PathVertex& v = vertex(i);
-        from_light[i] = i < s ? v.pdf_fwd : v.pdf_rev;
-        from_camera[i] = i < s ? v.pdf_rev : v.pdf_fwd;
-        delta[i] = v.delta;
+        from_light[size_t(i)] = i < s ? v.pdf_fwd : v.pdf_rev;
+        from_camera[size_t(i)] = i < s ? v.pdf_rev : v.pdf_fwd;
+        delta[size_t(i)] = v.delta;
     }
 
     // The densities the connection changes: of pt = x_s and its predecessor x_{s+1} from the light side, of
