@@ -75,6 +75,8 @@ std::string thinlens(const std::string& i) {
                                  "gaussian"));
 }
 
+void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
+
 class BDPTvsPath : public ::testing::TestWithParam<Case> {};
 
 TEST_P(BDPTvsPath, SameImage) {
@@ -98,5 +100,19 @@ INSTANTIATE_TEST_SUITE_P(BDPT, BDPTvsPath,
                                            Case{"environment", environment, 16, 8},
                                            Case{"glass", glass_sphere, 16, 8}, Case{"thinlens", thinlens, 16, 8}),
                          [](const auto& info) { return std::string(info.param.name); });
+
+// Light tracing on both sides: bdpt's splats (t = 1) and ptracer's normalize alike through a wide filter.
+TEST(BDPTvsParticleTracer, SameImageWithGaussianFilter) {
+    const std::string sensor = bdpt_sensor("perspective", kInsideBox, 70.f, 24, "", "gaussian");
+    const auto ptracer = load_scene_string(box_scene(integrator_xml("ptracer"), kCeilingLight, sensor));
+    const auto bdpt = load_scene_string(box_scene(integrator_xml("bdpt"), kCeilingLight, sensor));
+    const BlockStats a = block_stats(*bdpt, 12, 8, 1);
+    const BlockStats b = block_stats(*ptracer, 12, 16, 200001);
+    const std::vector<double> z = z_scores(a, b);
+    std::printf("[bdpt vs ptracer] cbox, gaussian filter: image mean %.5f vs %.5f, z = %.2f, max block |z| = %.2f\n",
+                a.mean[0], b.mean[0], z[0], max_abs(z, 1));
+    EXPECT_LT(std::abs(z[0]), 4.0);
+    EXPECT_LT(max_abs(z, 1), 4.5);
+}
 
 } // namespace

@@ -147,7 +147,7 @@ TEST(BDPTMedia, FurnaceInsideNullBoundedMedium) {
                    "</medium>" +
                        camera_at_origin(60.f, "<ref id=\"fog\"/>") +
                        "<shape type=\"cube\"><bsdf type=\"null\"/><ref name=\"interior\" id=\"fog\"/></shape>",
-                   "null cube", 4, 31);
+                   "null cube", 8, 31);
 }
 
 TEST(BDPTMedia, FurnaceInsideDielectricSphere) {
@@ -157,7 +157,7 @@ TEST(BDPTMedia, FurnaceInsideDielectricSphere) {
                        "<shape type=\"sphere\"><bsdf type=\"dielectric\"/><medium type=\"homogeneous\" "
                        "name=\"interior\"><float name=\"sigma_t\" value=\"2\"/><float name=\"albedo\" value=\"1\"/>"
                        "<phase type=\"hg\"><float name=\"g\" value=\"-0.3\"/></phase></medium></shape>",
-                   "dielectric sphere", 4, 41);
+                   "dielectric sphere", 8, 41);
 }
 
 } // namespace

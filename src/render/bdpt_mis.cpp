@@ -62,18 +62,22 @@ float mis_weight(const BDPTContext& ctx, const Strategy& st) {
         if (i >= n) return false;
         if (i == 0) return !st.emitter->is_delta();
         if (i == 1 && n == 2) return area_light;
-        return !delta[i - 1] && !delta[i];
+        return !delta[size_t(i - 1)] && !delta[size_t(i)];
     };
-    const float exponent = ctx.settings.heuristic == MISHeuristic::Power ? 2.f : 1.f;
+    const bool power = ctx.settings.heuristic == MISHeuristic::Power;
+    auto density_ratio = [&](float num, float den) {
+        const float q = ratio(num, den);
+        return power ? q * q : q;
+    };
     float sum = 1.f, r = 1.f;
     for (int i = s + 1; i < n; ++i) {
-        r *= ratio(from_light[i - 1], from_camera[i - 1]);
-        if (usable(i)) sum += std::pow(r, exponent);
+        r *= density_ratio(from_light[size_t(i - 1)], from_camera[size_t(i - 1)]);
+        if (usable(i)) sum += r;
     }
     r = 1.f;
     for (int i = s - 1; i >= 0; --i) {
-        r *= ratio(from_camera[i], from_light[i]);
-        if (usable(i)) sum += std::pow(r, exponent);
+        r *= density_ratio(from_camera[size_t(i)], from_light[size_t(i)]);
+        if (usable(i)) sum += r;
     }
     const float w = 1.f / sum;
     return std::isfinite(w) ? w : 0.f;

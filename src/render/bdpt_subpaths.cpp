@@ -66,7 +66,7 @@ void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, 
                  std::vector<PathVertex>& path, size_t max_vertices) {
     const BDPTContext& c = ctx;
     const BSDFContext bsdf_ctx{mode};
-    std::vector<Piece> pieces;
+    thread_local std::vector<Piece> pieces;
     float eta = 1.f;
     while (path.size() < max_vertices) {
         // Follow the ray to the next vertex, through null surfaces, sampling free flights.
@@ -252,7 +252,8 @@ Ray ray_between(const PathVertex& v, const Vec3f& target) {
 std::pair<float, float> connection_free_flight(BDPTContext& ctx, const PathVertex& a, const PathVertex& b,
                                                const Medium* medium) {
     if (!ctx.has_media) return {1.f, 1.f};
-    std::vector<Piece> pieces;
+    thread_local std::vector<Piece> pieces;
+    pieces.clear();
     Ray ray = ray_between(a, b.p);
     for (int crossing = 0; crossing < 256; ++crossing) {
         ++ctx.rays.rays;
