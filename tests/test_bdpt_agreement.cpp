@@ -14,18 +14,21 @@ const std::string kInsideBox = "<lookat origin=\"0,0,-0.95\" target=\"0,0,1\" up
 
 // A closed diffuse box (coloured side walls) seen from inside, with a diffuse sphere; `extra` adds lights
 // and objects.
-std::string box_scene(const std::string& integrator, const std::string& extra, const std::string& sensor = "") {
+std::string box_scene(const std::string& integrator, const std::string& extra,
+                      const std::string& sensor = "") {
     return "<scene version=\"3.0.0\">" + integrator +
            (sensor.empty() ? bdpt_sensor("perspective", kInsideBox, 70.f, 24) : sensor) +
            "<shape type=\"cube\"><boolean name=\"flip_normals\" value=\"true\"/>"
            "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.6,0.5,0.4\"/></bsdf></shape>"
            "<shape type=\"sphere\"><point name=\"center\" value=\"0.35,-0.6,0.3\"/><float name=\"radius\" "
-           "value=\"0.35\"/><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.3,0.6,0.3\"/></bsdf></shape>" +
+           "value=\"0.35\"/><bsdf type=\"diffuse\"><rgb name=\"reflectance\" "
+           "value=\"0.3,0.6,0.3\"/></bsdf></shape>" +
            extra + "</scene>";
 }
 
 const std::string kCeilingLight =
-    "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"0.3\"/><rotate x=\"1\" angle=\"90\"/>"
+    "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"0.3\"/><rotate x=\"1\" "
+    "angle=\"90\"/>"
     "<translate value=\"0,0.95,0\"/></transform><emitter type=\"area\"><rgb name=\"radiance\" value=\"8\"/>"
     "</emitter></shape>";
 
@@ -34,9 +37,11 @@ std::string open_scene(const std::string& integrator, const std::string& extra) 
     return "<scene version=\"3.0.0\">" + integrator +
            bdpt_sensor("perspective", "<lookat origin=\"0,3,-3\" target=\"0,0,0\" up=\"0,1,0\"/>", 45.f, 24) +
            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/><rotate x=\"1\" "
-           "angle=\"-90\"/></transform><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.5\"/></bsdf>"
+           "angle=\"-90\"/></transform><bsdf type=\"diffuse\"><rgb name=\"reflectance\" "
+           "value=\"0.5\"/></bsdf>"
            "</shape><shape type=\"sphere\"><point name=\"center\" value=\"0,0.5,0\"/><float name=\"radius\" "
-           "value=\"0.5\"/><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.7,0.4,0.3\"/></bsdf></shape>" +
+           "value=\"0.5\"/><bsdf type=\"diffuse\"><rgb name=\"reflectance\" "
+           "value=\"0.7,0.4,0.3\"/></bsdf></shape>" +
            extra + "</scene>";
 }
 
@@ -52,9 +57,10 @@ std::string point_light(const std::string& i) {
                         "<rgb name=\"intensity\" value=\"2\"/></emitter>");
 }
 std::string spot_light(const std::string& i) {
-    return box_scene(i, "<emitter type=\"spot\"><float name=\"cutoff_angle\" value=\"40\"/><rgb name=\"intensity\" "
-                        "value=\"6\"/><transform name=\"to_world\"><lookat origin=\"0,0.9,0\" target=\"0.2,-1,0.3\" "
-                        "up=\"0,0,1\"/></transform></emitter>");
+    return box_scene(
+        i, "<emitter type=\"spot\"><float name=\"cutoff_angle\" value=\"40\"/><rgb name=\"intensity\" "
+           "value=\"6\"/><transform name=\"to_world\"><lookat origin=\"0,0.9,0\" target=\"0.2,-1,0.3\" "
+           "up=\"0,0,1\"/></transform></emitter>");
 }
 std::string directional_light(const std::string& i) {
     return open_scene(i, "<emitter type=\"directional\"><vector name=\"direction\" value=\"0.4,-1,0.3\"/>"
@@ -64,15 +70,17 @@ std::string environment(const std::string& i) {
     return open_scene(i, "<emitter type=\"constant\"><rgb name=\"radiance\" value=\"0.8,0.9,1\"/></emitter>");
 }
 std::string glass_sphere(const std::string& i) {
-    return box_scene(i, kCeilingLight + "<shape type=\"sphere\"><point name=\"center\" value=\"-0.35,-0.55,0.1\"/>"
-                                        "<float name=\"radius\" value=\"0.3\"/><bsdf type=\"dielectric\"/></shape>");
+    return box_scene(i, kCeilingLight +
+                            "<shape type=\"sphere\"><point name=\"center\" value=\"-0.35,-0.55,0.1\"/>"
+                            "<float name=\"radius\" value=\"0.3\"/><bsdf type=\"dielectric\"/></shape>");
 }
 std::string thinlens(const std::string& i) {
-    return box_scene(i, kCeilingLight,
-                     bdpt_sensor("thinlens", kInsideBox, 70.f, 24,
-                                 "<float name=\"aperture_radius\" value=\"0.08\"/><float name=\"focus_distance\" "
-                                 "value=\"1.2\"/>",
-                                 "gaussian"));
+    return box_scene(
+        i, kCeilingLight,
+        bdpt_sensor("thinlens", kInsideBox, 70.f, 24,
+                    "<float name=\"aperture_radius\" value=\"0.08\"/><float name=\"focus_distance\" "
+                    "value=\"1.2\"/>",
+                    "gaussian"));
 }
 
 void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
@@ -86,8 +94,8 @@ TEST_P(BDPTvsPath, SameImage) {
     const BlockStats a = block_stats(*bdpt, 12, c.spp_bdpt, 1);
     const BlockStats b = block_stats(*path, 12, c.spp_path, 100001);
     const std::vector<double> z = z_scores(a, b);
-    std::printf("[bdpt vs path] %s: image mean %.5f vs %.5f, z = %.2f, max block |z| = %.2f\n", c.name, a.mean[0],
-                b.mean[0], z[0], max_abs(z, 1));
+    std::printf("[bdpt vs path] %s: image mean %.5f vs %.5f, z = %.2f, max block |z| = %.2f\n", c.name,
+                a.mean[0], b.mean[0], z[0], max_abs(z, 1));
     EXPECT_GT(a.mean[0], 0.0);
     EXPECT_LT(std::abs(z[0]), 4.0) << c.name;
     EXPECT_LT(max_abs(z, 1), 4.5) << c.name;
@@ -98,7 +106,8 @@ INSTANTIATE_TEST_SUITE_P(BDPT, BDPTvsPath,
                                            Case{"spot", spot_light, 16, 8},
                                            Case{"directional", directional_light, 16, 8},
                                            Case{"environment", environment, 16, 8},
-                                           Case{"glass", glass_sphere, 16, 8}, Case{"thinlens", thinlens, 16, 8}),
+                                           Case{"glass", glass_sphere, 16, 8},
+                                           Case{"thinlens", thinlens, 16, 8}),
                          [](const auto& info) { return std::string(info.param.name); });
 
 // Light tracing on both sides: bdpt's splats (t = 1) and ptracer's normalize alike through a wide filter.
@@ -109,8 +118,9 @@ TEST(BDPTvsParticleTracer, SameImageWithGaussianFilter) {
     const BlockStats a = block_stats(*bdpt, 12, 8, 1);
     const BlockStats b = block_stats(*ptracer, 12, 16, 200001);
     const std::vector<double> z = z_scores(a, b);
-    std::printf("[bdpt vs ptracer] cbox, gaussian filter: image mean %.5f vs %.5f, z = %.2f, max block |z| = %.2f\n",
-                a.mean[0], b.mean[0], z[0], max_abs(z, 1));
+    std::printf(
+        "[bdpt vs ptracer] cbox, gaussian filter: image mean %.5f vs %.5f, z = %.2f, max block |z| = %.2f\n",
+        a.mean[0], b.mean[0], z[0], max_abs(z, 1));
     EXPECT_LT(std::abs(z[0]), 4.0);
     EXPECT_LT(max_abs(z, 1), 4.5);
 }

@@ -12,13 +12,16 @@ namespace {
 
 std::string caustic_scene(const std::string& integrator) {
     return "<scene version=\"3.0.0\">" + integrator +
-           bdpt_sensor("perspective", "<lookat origin=\"0,2.2,-2.2\" target=\"0,0.2,0\" up=\"0,1,0\"/>", 35.f, 24) +
+           bdpt_sensor("perspective", "<lookat origin=\"0,2.2,-2.2\" target=\"0,0.2,0\" up=\"0,1,0\"/>", 35.f,
+                       24) +
            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"2\"/><rotate x=\"1\" "
-           "angle=\"-90\"/></transform><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.8\"/></bsdf>"
+           "angle=\"-90\"/></transform><bsdf type=\"diffuse\"><rgb name=\"reflectance\" "
+           "value=\"0.8\"/></bsdf>"
            "</shape><shape type=\"sphere\"><point name=\"center\" value=\"0,0.6,0\"/><float name=\"radius\" "
            "value=\"0.4\"/><bsdf type=\"dielectric\"/></shape>"
            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"0.05\"/><rotate x=\"1\" "
-           "angle=\"90\"/><translate value=\"0,2,0\"/></transform><emitter type=\"area\"><rgb name=\"radiance\" "
+           "angle=\"90\"/><translate value=\"0,2,0\"/></transform><emitter type=\"area\"><rgb "
+           "name=\"radiance\" "
            "value=\"400\"/></emitter></shape></scene>";
 }
 
@@ -29,22 +32,25 @@ TEST(BDPTCaustic, AgreesWithPathAndIsMoreEfficient) {
     const BlockStats b = block_stats(*path, 12, 256, 100001);
     const std::vector<double> z = z_scores(a, b);
     const double ratio = (a.pixel_variance * a.seconds) / (b.pixel_variance * b.seconds);
-    std::printf("[bdpt caustic] mean %.5f vs path %.5f, z = %.2f, max block |z| = %.2f; variance x time: bdpt "
-                "%.3g x %.3g s, path %.3g x %.3g s, ratio %.3f\n",
-                a.mean[0], b.mean[0], z[0], max_abs(z, 1), a.pixel_variance, a.seconds, b.pixel_variance,
-                b.seconds, ratio);
+    std::printf(
+        "[bdpt caustic] mean %.5f vs path %.5f, z = %.2f, max block |z| = %.2f; variance x time: bdpt "
+        "%.3g x %.3g s, path %.3g x %.3g s, ratio %.3f\n",
+        a.mean[0], b.mean[0], z[0], max_abs(z, 1), a.pixel_variance, a.seconds, b.pixel_variance, b.seconds,
+        ratio);
     EXPECT_LT(std::abs(z[0]), 4.0);
     EXPECT_LT(max_abs(z, 1), 4.5);
     EXPECT_LT(ratio, 0.5);
 }
 
 TEST(BDPTDeterminism, SameImageWithOneAndTwoThreads) {
-    // Every feature at once: light tracing splats, media behind a dielectric, an environment and an area light.
+    // Every feature at once: light tracing splats, media behind a dielectric, an environment and an area
+    // light.
     const auto scene = load_scene_string(
         "<scene version=\"3.0.0\">" + integrator_xml("bdpt") +
-        bdpt_sensor("perspective", "<lookat origin=\"0,2.2,-2.2\" target=\"0,0.2,0\" up=\"0,1,0\"/>", 35.f, 24, "",
-                    "gaussian") +
-        "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"2\"/><rotate x=\"1\" angle=\"-90\"/>"
+        bdpt_sensor("perspective", "<lookat origin=\"0,2.2,-2.2\" target=\"0,0.2,0\" up=\"0,1,0\"/>", 35.f,
+                    24, "", "gaussian") +
+        "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"2\"/><rotate x=\"1\" "
+        "angle=\"-90\"/>"
         "</transform><bsdf type=\"diffuse\"/></shape><shape type=\"sphere\"><point name=\"center\" "
         "value=\"0,0.6,0\"/><float name=\"radius\" value=\"0.4\"/><bsdf type=\"dielectric\"/><medium "
         "type=\"homogeneous\" name=\"interior\"><float name=\"sigma_t\" value=\"2\"/></medium></shape>"

@@ -42,7 +42,8 @@ template <typename Radiance> std::vector<double> reference_blocks(float tan_half
 }
 
 std::string camera_at_origin(float fov, const std::string& extra = "") {
-    return bdpt_sensor("perspective", "<lookat origin=\"0,0,0\" target=\"0,0,1\" up=\"0,1,0\"/>", fov, 24, extra);
+    return bdpt_sensor("perspective", "<lookat origin=\"0,0,0\" target=\"0,0,1\" up=\"0,1,0\"/>", fov, 24,
+                       extra);
 }
 
 TEST(BDPTMedia, AbsorbingSlabTransmittance) {
@@ -51,7 +52,8 @@ TEST(BDPTMedia, AbsorbingSlabTransmittance) {
         "<shape type=\"cube\"><transform name=\"to_world\"><scale value=\"3,3,0.25\"/><translate "
         "value=\"0,0,1.25\"/></transform><bsdf type=\"null\"/><medium type=\"homogeneous\" name=\"interior\">"
         "<rgb name=\"sigma_t\" value=\"1,2,3\"/><float name=\"albedo\" value=\"0\"/></medium></shape>"
-        "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"5\"/><rotate y=\"1\" angle=\"180\"/>"
+        "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"5\"/><rotate y=\"1\" "
+        "angle=\"180\"/>"
         "<translate value=\"0,0,3\"/></transform><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/>"
         "</emitter></shape>";
     const float fov = 20.f, tan_half = std::tan(0.5f * fov * float(M_PI) / 180.f);
@@ -73,13 +75,15 @@ TEST(BDPTMedia, AbsorbingSlabTransmittance) {
         EXPECT_LT(max_abs(z, 1), 4.5);
     }
     // Only directly visible emission reaches the camera: hiding emitters leaves a black image.
-    const auto hidden = load_scene_string("<scene version=\"3.0.0\">" +
-                                          integrator_xml("bdpt", "<boolean name=\"hide_emitters\" value=\"true\"/>") +
-                                          camera_at_origin(fov) + slab + "</scene>");
+    const auto hidden =
+        load_scene_string("<scene version=\"3.0.0\">" +
+                          integrator_xml("bdpt", "<boolean name=\"hide_emitters\" value=\"true\"/>") +
+                          camera_at_origin(fov) + slab + "</scene>");
     RenderOptions opt;
     opt.spp = 2;
     const Image black = render(*hidden, opt);
-    for (const Color3f& p : black.pixels) EXPECT_EQ(p.x + p.y + p.z, 0.f);
+    for (const Color3f& p : black.pixels)
+        EXPECT_EQ(p.x + p.y + p.z, 0.f);
 }
 
 TEST(BDPTMedia, SingleScatteringFromPointLight) {
@@ -89,8 +93,9 @@ TEST(BDPTMedia, SingleScatteringFromPointLight) {
     // T the distance to the box along ω, r(t) the distance from the camera ray's point to the light.
     const float sigma_t = 0.5f, albedo = 0.8f, intensity = 3.f;
     const std::array<double, 3> light{1.0, 1.0, 2.0};
-    const std::string medium = "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_t\" value=\"0.5\"/>"
-                               "<float name=\"albedo\" value=\"0.8\"/></medium>";
+    const std::string medium =
+        "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_t\" value=\"0.5\"/>"
+        "<float name=\"albedo\" value=\"0.8\"/></medium>";
     const float fov = 40.f, tan_half = std::tan(0.5f * fov * float(M_PI) / 180.f);
     const auto reference = reference_blocks(tan_half, 6, [&](double dx, double dy, double dz) {
         const double T = 4.0 / std::max({std::abs(dx), std::abs(dy), std::abs(dz)});
@@ -107,18 +112,22 @@ TEST(BDPTMedia, SingleScatteringFromPointLight) {
     for (const char* heuristic : {"power", "balance"}) {
         const auto scene = load_scene_string(
             "<scene version=\"3.0.0\">" + medium +
-            integrator_xml("bdpt", std::string("<integer name=\"max_depth\" value=\"2\"/><string name=\"heuristic\" "
-                                               "value=\"") + heuristic + "\"/>") +
+            integrator_xml("bdpt",
+                           std::string("<integer name=\"max_depth\" value=\"2\"/><string name=\"heuristic\" "
+                                       "value=\"") +
+                               heuristic + "\"/>") +
             camera_at_origin(fov, "<ref id=\"fog\"/>") +
-            "<shape type=\"cube\"><transform name=\"to_world\"><scale value=\"4\"/></transform><bsdf type=\"null\"/>"
+            "<shape type=\"cube\"><transform name=\"to_world\"><scale value=\"4\"/></transform><bsdf "
+            "type=\"null\"/>"
             "<ref name=\"interior\" id=\"fog\"/></shape><emitter type=\"point\"><point name=\"position\" "
             "value=\"1,1,2\"/><float name=\"intensity\" value=\"3\"/></emitter></scene>");
         const BlockStats s = block_stats(*scene, 12, 8, 21);
         // 6x6 directions per block, 4000 midpoint steps along the ray (the integrand is smooth: the light is
         // at least 0.3 away from every camera ray): the quadrature error is below 1e-4 relative.
         const auto z = z_against(s, reference, 1e-4 * reference[0]);
-        std::printf("[bdpt single scattering, %s] mean %.6f vs quadrature %.6f, z = %.2f, max block |z| = %.2f\n",
-                    heuristic, s.mean[0], reference[0], z[0], max_abs(z, 1));
+        std::printf(
+            "[bdpt single scattering, %s] mean %.6f vs quadrature %.6f, z = %.2f, max block |z| = %.2f\n",
+            heuristic, s.mean[0], reference[0], z[0], max_abs(z, 1));
         EXPECT_LT(z[0], 4.0);
         EXPECT_LT(max_abs(z, 1), 4.5);
     }
@@ -129,8 +138,8 @@ void expect_furnace(const std::string& body, const char* what, int spp, uint64_t
     for (const char* heuristic : {"power", "balance"}) {
         const auto scene = load_scene_string(
             "<scene version=\"3.0.0\">" +
-            integrator_xml("bdpt", std::string("<string name=\"heuristic\" value=\"") + heuristic + "\"/>") + body +
-            "<emitter type=\"constant\"><rgb name=\"radiance\" value=\"1\"/></emitter></scene>");
+            integrator_xml("bdpt", std::string("<string name=\"heuristic\" value=\"") + heuristic + "\"/>") +
+            body + "<emitter type=\"constant\"><rgb name=\"radiance\" value=\"1\"/></emitter></scene>");
         const BlockStats s = block_stats(*scene, 12, spp, seed);
         const auto z = z_against(s, std::vector<double>(17, 1.0), 0.0);
         std::printf("[bdpt furnace, %s, %s] mean %.5f (stderr %.5f), z = %.2f, max block |z| = %.2f\n", what,
@@ -142,22 +151,24 @@ void expect_furnace(const std::string& body, const char* what, int spp, uint64_t
 
 TEST(BDPTMedia, FurnaceInsideNullBoundedMedium) {
     // Chromatic extinction and forward scattering; the camera sits in the medium (the sensor's medium).
-    expect_furnace("<medium type=\"homogeneous\" id=\"fog\"><rgb name=\"sigma_t\" value=\"1,2,0.5\"/>"
-                   "<float name=\"albedo\" value=\"1\"/><phase type=\"hg\"><float name=\"g\" value=\"0.4\"/></phase>"
-                   "</medium>" +
-                       camera_at_origin(60.f, "<ref id=\"fog\"/>") +
-                       "<shape type=\"cube\"><bsdf type=\"null\"/><ref name=\"interior\" id=\"fog\"/></shape>",
-                   "null cube", 8, 31);
+    expect_furnace(
+        "<medium type=\"homogeneous\" id=\"fog\"><rgb name=\"sigma_t\" value=\"1,2,0.5\"/>"
+        "<float name=\"albedo\" value=\"1\"/><phase type=\"hg\"><float name=\"g\" value=\"0.4\"/></phase>"
+        "</medium>" +
+            camera_at_origin(60.f, "<ref id=\"fog\"/>") +
+            "<shape type=\"cube\"><bsdf type=\"null\"/><ref name=\"interior\" id=\"fog\"/></shape>",
+        "null cube", 8, 31);
 }
 
 TEST(BDPTMedia, FurnaceInsideDielectricSphere) {
     // Light enters and leaves the medium only through delta refractions: medium vertices connect to each
     // other inside the sphere, and to the outside only through the subpaths.
-    expect_furnace(bdpt_sensor("perspective", "<lookat origin=\"0,0,-3\" target=\"0,0,0\" up=\"0,1,0\"/>", 30.f, 24) +
-                       "<shape type=\"sphere\"><bsdf type=\"dielectric\"/><medium type=\"homogeneous\" "
-                       "name=\"interior\"><float name=\"sigma_t\" value=\"2\"/><float name=\"albedo\" value=\"1\"/>"
-                       "<phase type=\"hg\"><float name=\"g\" value=\"-0.3\"/></phase></medium></shape>",
-                   "dielectric sphere", 8, 41);
+    expect_furnace(
+        bdpt_sensor("perspective", "<lookat origin=\"0,0,-3\" target=\"0,0,0\" up=\"0,1,0\"/>", 30.f, 24) +
+            "<shape type=\"sphere\"><bsdf type=\"dielectric\"/><medium type=\"homogeneous\" "
+            "name=\"interior\"><float name=\"sigma_t\" value=\"2\"/><float name=\"albedo\" value=\"1\"/>"
+            "<phase type=\"hg\"><float name=\"g\" value=\"-0.3\"/></phase></medium></shape>",
+        "dielectric sphere", 8, 41);
 }
 
 } // namespace

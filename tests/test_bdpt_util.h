@@ -15,12 +15,12 @@ namespace penumbra::test {
 
 inline std::string bdpt_sensor(const std::string& type, const std::string& lookat, float fov, int res,
                                const std::string& extra = "", const std::string& rfilter = "box") {
-    return "<sensor type=\"" + type + "\"><float name=\"fov\" value=\"" + std::to_string(fov) + "\"/>" + extra +
-           "<transform name=\"to_world\">" + lookat +
+    return "<sensor type=\"" + type + "\"><float name=\"fov\" value=\"" + std::to_string(fov) + "\"/>" +
+           extra + "<transform name=\"to_world\">" + lookat +
            "</transform><sampler type=\"independent\"><integer name=\"sample_count\" value=\"4\"/></sampler>"
-           "<film type=\"hdrfilm\"><integer name=\"width\" value=\"" + std::to_string(res) +
-           "\"/><integer name=\"height\" value=\"" + std::to_string(res) + "\"/><rfilter type=\"" + rfilter +
-           "\"/></film></sensor>";
+           "<film type=\"hdrfilm\"><integer name=\"width\" value=\"" +
+           std::to_string(res) + "\"/><integer name=\"height\" value=\"" + std::to_string(res) +
+           "\"/><rfilter type=\"" + rfilter + "\"/></film></sensor>";
 }
 
 inline std::string integrator_xml(const std::string& type, const std::string& params = "") {
@@ -29,9 +29,9 @@ inline std::string integrator_xml(const std::string& type, const std::string& pa
 
 // The image mean and the means of a 4x4 grid of blocks (channels summed), over independent renders.
 struct BlockStats {
-    std::vector<double> mean, stderr_;  // [0]: image, [1..16]: blocks
-    double seconds = 0.0;               // render time per image
-    double pixel_variance = 0.0;        // per-pixel variance of one image (channel mean), averaged over pixels
+    std::vector<double> mean, stderr_; // [0]: image, [1..16]: blocks
+    double seconds = 0.0;              // render time per image
+    double pixel_variance = 0.0;       // per-pixel variance of one image (channel mean), averaged over pixels
 };
 
 inline BlockStats block_stats(const Scene& scene, int renders, int spp, uint64_t seed0) {
@@ -62,10 +62,12 @@ inline BlockStats block_stats(const Scene& scene, int renders, int spp, uint64_t
     out.stderr_.assign(n, 0.0);
     for (int i = 0; i < n; ++i) {
         double m = 0, m2 = 0;
-        for (const auto& v : values) m += v[size_t(i)], m2 += v[size_t(i)] * v[size_t(i)];
+        for (const auto& v : values)
+            m += v[size_t(i)], m2 += v[size_t(i)] * v[size_t(i)];
         m /= renders;
         out.mean[size_t(i)] = m;
-        out.stderr_[size_t(i)] = std::sqrt(std::max(0.0, (m2 / renders - m * m) * renders / (renders - 1)) / renders);
+        out.stderr_[size_t(i)] =
+            std::sqrt(std::max(0.0, (m2 / renders - m * m) * renders / (renders - 1)) / renders);
     }
     // Per-pixel variance across renders (the variance of one render's pixel estimate).
     const size_t pixels = images[0].pixels.size();
@@ -96,7 +98,8 @@ inline std::vector<double> z_scores(const BlockStats& a, const BlockStats& b) {
 
 inline double max_abs(const std::vector<double>& v, size_t from) {
     double m = 0;
-    for (size_t i = from; i < v.size(); ++i) m = std::max(m, std::abs(v[i]));
+    for (size_t i = from; i < v.size(); ++i)
+        m = std::max(m, std::abs(v[i]));
     return m;
 }
 

@@ -4,10 +4,10 @@
 //
 // | parameter      | type    | default | meaning                                                          |
 // |----------------|---------|---------|------------------------------------------------------------------|
-// | max_depth      | integer | -1      | longest path depth in segments (-1 = infinite, 1 = visible emitters) |
-// | rr_depth       | integer | 5       | subpath depth at which Russian roulette starts                    |
-// | hide_emitters  | boolean | false   | do not show directly visible emitters                            |
-// | heuristic      | string  | power   | MIS weights: `power` (exponent 2) or `balance` heuristic          |
+// | max_depth      | integer | -1      | longest path depth in segments (-1 = infinite, 1 = visible emitters)
+// | | rr_depth       | integer | 5       | subpath depth at which Russian roulette starts | | hide_emitters
+// | boolean | false   | do not show directly visible emitters                            | | heuristic      |
+// string  | power   | MIS weights: `power` (exponent 2) or `balance` heuristic          |
 //
 // Light tracing (t = 1) splats into the film like `ptracer`. Media attached to emitters are found from the
 // first surface declaring media along the emitted ray (vacuum if there is none, or the sensor's medium when
@@ -34,9 +34,12 @@ BidirectionalPathTracer::BidirectionalPathTracer(const Properties& props) {
     settings_.rr_depth = int(props.get_int("rr_depth", 5));
     settings_.hide_emitters = props.get_bool("hide_emitters", false);
     const std::string heuristic = props.get_string("heuristic", "power");
-    if (heuristic == "power") settings_.heuristic = MISHeuristic::Power;
-    else if (heuristic == "balance") settings_.heuristic = MISHeuristic::Balance;
-    else props.raise("heuristic", "must be 'power' or 'balance', got '" + heuristic + "'");
+    if (heuristic == "power")
+        settings_.heuristic = MISHeuristic::Power;
+    else if (heuristic == "balance")
+        settings_.heuristic = MISHeuristic::Balance;
+    else
+        props.raise("heuristic", "must be 'power' or 'balance', got '" + heuristic + "'");
     if (settings_.max_depth < -1) props.raise("max_depth", "must be -1 (infinite) or non-negative");
     if (settings_.rr_depth <= 0) props.raise("rr_depth", "must be positive");
 }
@@ -98,8 +101,10 @@ std::vector<Layer> BidirectionalPathTracer::render(const Scene& scene, const Ren
                     camera_subpath(ctx, ray, u_aperture, camera, max_camera);
                     light_subpath(ctx, light, max_light);
                     const Color3f L = connect_subpaths(ctx, camera, light, splats[size_t(c)]);
-                    if (is_finite(L)) sum += L * weight;
-                    else ++local_dropped;
+                    if (is_finite(L))
+                        sum += L * weight;
+                    else
+                        ++local_dropped;
                 }
                 image.at(x, y) = sum / float(spp);
                 const uint64_t finished = ++done;
@@ -117,7 +122,8 @@ std::vector<Layer> BidirectionalPathTracer::render(const Scene& scene, const Ren
     // pixels over the number of light subpaths (one per camera sample), i.e. 1 / spp.
     const float scale = 1.f / float(spp);
     for (const Image& chunk : splats)
-        for (size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] += chunk.pixels[i] * scale;
+        for (size_t i = 0; i < image.pixels.size(); ++i)
+            image.pixels[i] += chunk.pixels[i] * scale;
 
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     stats.samples = n_pixels * uint64_t(spp);

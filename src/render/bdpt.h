@@ -7,7 +7,8 @@ namespace penumbra {
 class BidirectionalPathTracer final : public Integrator {
   public:
     explicit BidirectionalPathTracer(const Properties& props);
-    std::vector<Layer> render(const Scene& scene, const RenderOptions& options, RenderStats& stats) const override;
+    std::vector<Layer> render(const Scene& scene, const RenderOptions& options,
+                              RenderStats& stats) const override;
 
   private:
     BDPTSettings settings_;

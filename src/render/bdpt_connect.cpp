@@ -79,7 +79,8 @@ Color3f next_event(BDPTContext& ctx, const std::vector<PathVertex>& camera, int 
     if (is_black(f)) return Color3f(0.f);
     const Medium* medium = medium_toward(pt, ds.d);
     const bool area = ds.emitter->shape() != nullptr;
-    const Color3f tr = segment_transmittance(ctx.scene, connection_ray(pt, ds.p, area), medium, ctx.sampler, ctx.rays);
+    const Color3f tr =
+        segment_transmittance(ctx.scene, connection_ray(pt, ds.p, area), medium, ctx.sampler, ctx.rays);
     if (is_black(tr)) return Color3f(0.f);
 
     PathVertex light;
@@ -104,11 +105,12 @@ Color3f connect(BDPTContext& ctx, const std::vector<PathVertex>& light, const st
     const float dist2 = squared_norm(d);
     if (!(dist2 > 0.f)) return Color3f(0.f);
     const Vec3f w = d / std::sqrt(dist2);
-    const Color3f f = scattering(pt, w, TransportMode::Radiance) * scattering(qs, -w, TransportMode::Importance);
+    const Color3f f =
+        scattering(pt, w, TransportMode::Radiance) * scattering(qs, -w, TransportMode::Importance);
     if (is_black(f)) return Color3f(0.f);
     const Medium* medium = medium_toward(pt, w);
-    const Color3f tr = segment_transmittance(ctx.scene, connection_ray(pt, qs.p, qs.type == VertexType::Surface),
-                                             medium, ctx.sampler, ctx.rays);
+    const Color3f tr = segment_transmittance(
+        ctx.scene, connection_ray(pt, qs.p, qs.type == VertexType::Surface), medium, ctx.sampler, ctx.rays);
     if (is_black(tr)) return Color3f(0.f);
     Strategy st{s, t, &light, &camera, nullptr, nullptr, light[0].emitter};
     std::tie(st.ff_to_light, st.ff_to_camera) = connection_free_flight(ctx, pt, qs, medium);
@@ -135,7 +137,8 @@ void light_tracing(BDPTContext& ctx, const std::vector<PathVertex>& light, int s
     }
     if (is_black(value)) return;
     const Medium* medium = medium_toward(qs, ds.d);
-    const Color3f tr = segment_transmittance(ctx.scene, connection_ray(qs, ds.p, true), medium, ctx.sampler, ctx.rays);
+    const Color3f tr =
+        segment_transmittance(ctx.scene, connection_ray(qs, ds.p, true), medium, ctx.sampler, ctx.rays);
     if (is_black(tr)) return;
     PathVertex camera;
     camera.type = VertexType::Camera;
@@ -147,7 +150,8 @@ void light_tracing(BDPTContext& ctx, const std::vector<PathVertex>& light, int s
     const Color3f contribution = value * importance * tr * mis_weight(ctx, st);
     if (!is_finite(contribution)) return;
     const Film& film = *sensor.film;
-    for_each_pixel_in_footprint(film, ds.uv, [&](int x, int y, float wf) { splats.at(x, y) += contribution * wf; });
+    for_each_pixel_in_footprint(film, ds.uv,
+                                [&](int x, int y, float wf) { splats.at(x, y) += contribution * wf; });
 }
 
 } // namespace
@@ -164,10 +168,14 @@ Color3f connect_subpaths(BDPTContext& ctx, const std::vector<PathVertex>& camera
             const int segments = s + t - 1;
             if (segments < 1 || segments > max_segments || (t == 1 && (s == 0 || s > n_light))) continue;
             if (segments == 1 && settings.hide_emitters) continue;
-            if (t == 1) light_tracing(ctx, light, s, splats);
-            else if (s == 0) L += emission_hit(ctx, camera, t);
-            else if (s == 1) L += next_event(ctx, camera, t);
-            else L += connect(ctx, light, camera, s, t);
+            if (t == 1)
+                light_tracing(ctx, light, s, splats);
+            else if (s == 0)
+                L += emission_hit(ctx, camera, t);
+            else if (s == 1)
+                L += next_event(ctx, camera, t);
+            else
+                L += connect(ctx, light, camera, s, t);
         }
     return L;
 }

@@ -36,8 +36,9 @@ float mis_weight(const BDPTContext& ctx, const Strategy& st) {
     if (s > 0) {
         const PathVertex& qs = vertex(s - 1);
         if (t >= 2) {
-            from_light[s] = s == 1 ? light_emission_density(ctx, st.emitter, qs, pt, st.ff_to_camera)
-                                   : scattering_density(qs, qs.wi, pt, st.ff_to_camera, TransportMode::Importance);
+            from_light[s] =
+                s == 1 ? light_emission_density(ctx, st.emitter, qs, pt, st.ff_to_camera)
+                       : scattering_density(qs, qs.wi, pt, st.ff_to_camera, TransportMode::Importance);
             from_light[s + 1] = scattering_density(pt, direction_to(pt, qs), vertex(s + 1), pt.ff_rev,
                                                    TransportMode::Importance);
             from_camera[s - 1] = scattering_density(pt, pt.wi, qs, st.ff_to_light, TransportMode::Radiance);

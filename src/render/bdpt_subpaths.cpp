@@ -25,7 +25,8 @@ float pass_density(const Piece& q) {
 // The free-flight factors of a segment made of `pieces` (in order from a to b): the density of the outcome
 // "passed every piece, then stopped at b" (scattered at b if b is a medium vertex), and the same walked from
 // b to a.
-std::pair<float, float> segment_free_flight(const std::vector<Piece>& pieces, bool a_in_medium, bool b_in_medium) {
+std::pair<float, float> segment_free_flight(const std::vector<Piece>& pieces, bool a_in_medium,
+                                            bool b_in_medium) {
     float fwd = 1.f, rev = 1.f;
     for (size_t k = 0; k < pieces.size(); ++k) {
         const Piece& q = pieces[k];
@@ -33,7 +34,8 @@ std::pair<float, float> segment_free_flight(const std::vector<Piece>& pieces, bo
         const bool last = k + 1 == pieces.size(), first = k == 0;
         const float pass = pass_density(q);
         fwd *= last && b_in_medium ? free_flight_pdf(*q.medium, q.o, q.d, q.length, true) : pass;
-        rev *= first && a_in_medium ? free_flight_pdf(*q.medium, q.o + q.d * q.length, -q.d, q.length, true) : pass;
+        rev *= first && a_in_medium ? free_flight_pdf(*q.medium, q.o + q.d * q.length, -q.d, q.length, true)
+                                    : pass;
     }
     return {fwd, rev};
 }
@@ -62,8 +64,8 @@ const Medium* locate_medium(BDPTContext& ctx, Ray ray) {
 
 // Extends `path` from its last vertex along `ray` (sampled with solid-angle density pdf_dir, or the disk
 // density from an infinite light), in `medium`, with throughput beta (pbrt-v3's RandomWalk with media).
-void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, float pdf_dir, TransportMode mode,
-                 std::vector<PathVertex>& path, size_t max_vertices) {
+void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, float pdf_dir,
+                 TransportMode mode, std::vector<PathVertex>& path, size_t max_vertices) {
     const BDPTContext& c = ctx;
     const BSDFContext bsdf_ctx{mode};
     thread_local std::vector<Piece> pieces;
@@ -149,8 +151,10 @@ void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, 
             if (is_black(weight)) return;
             wo = cur.si.to_world(bs.wo);
             beta *= weight;
-            if (mode == TransportMode::Importance) beta *= adjoint_shading_correction(cur.si, wo);
-            else eta *= bs.eta;
+            if (mode == TransportMode::Importance)
+                beta *= adjoint_shading_correction(cur.si, wo);
+            else
+                eta *= bs.eta;
             if (bs.sampled_type & BSDFDelta) {
                 cur.delta = true;
                 pdf_dir = 0.f;
@@ -158,9 +162,10 @@ void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, 
                 pdf_dir = bs.pdf;
                 SurfaceInteraction3f swapped = cur.si;
                 swapped.wi = bs.wo;
-                pdf_rev_dir = bsdf->pdf(BSDFContext{mode == TransportMode::Radiance ? TransportMode::Importance
-                                                                                    : TransportMode::Radiance},
-                                        swapped, cur.si.wi);
+                pdf_rev_dir =
+                    bsdf->pdf(BSDFContext{mode == TransportMode::Radiance ? TransportMode::Importance
+                                                                          : TransportMode::Radiance},
+                              swapped, cur.si.wi);
             }
             medium = target_medium(*cur.si.shape, cur.n, wo, medium);
             ray = cur.si.spawn_ray(wo);
@@ -209,7 +214,8 @@ float scattering_density(const PathVertex& v, const Vec3f& w_prev, const PathVer
     return to_area_density(v, next, pdf, ff);
 }
 
-float light_origin_density(const Scene& scene, const Emitter* emitter, const PathVertex& v, const PathVertex& next) {
+float light_origin_density(const Scene& scene, const Emitter* emitter, const PathVertex& v,
+                           const PathVertex& next) {
     const float selection = 1.f / float(scene.emitters.size());
     if (const Shape* shape = emitter->shape()) return selection * shape->pdf_position();
     if (emitter->flags() & EmitterDeltaPosition) return selection;
@@ -232,8 +238,10 @@ float light_emission_density(const BDPTContext& ctx, const Emitter* emitter, con
     }
     const Vec3f w = normalize(next.p - v.p);
     float pdf_dir = 0.f;
-    if (emitter->shape()) pdf_dir = std::max(dot(v.n, w), 0.f) * InvPi;
-    else pdf_dir = emitter->pdf_emission_direction(w);
+    if (emitter->shape())
+        pdf_dir = std::max(dot(v.n, w), 0.f) * InvPi;
+    else
+        pdf_dir = emitter->pdf_emission_direction(w);
     return to_area_density(v, next, pdf_dir, ff);
 }
 
@@ -332,8 +340,9 @@ void light_subpath(BDPTContext& ctx, std::vector<PathVertex>& path, size_t max_v
         if (!(pdf_dir > 0.f)) return;
         beta = emitter->eval(si) * (Pi / light.pdf_fwd);
         ray = si.spawn_ray(d);
-        medium = (shape->interior || shape->exterior) ? target_medium(*shape, ps.n, d, static_cast<const Medium*>(nullptr))
-                                                      : locate_medium(ctx, ray);
+        medium = (shape->interior || shape->exterior)
+                     ? target_medium(*shape, ps.n, d, static_cast<const Medium*>(nullptr))
+                     : locate_medium(ctx, ray);
     } else if (emitter->flags() & EmitterDeltaPosition) {
         // Point, spot, projector: the emitter's own ray sampling, whose direction density it reports.
         Color3f weight;
@@ -345,15 +354,16 @@ void light_subpath(BDPTContext& ctx, std::vector<PathVertex>& path, size_t max_v
         beta = weight / selection;
         medium = locate_medium(ctx, ray);
     } else {
-        // Infinite lights (pbrt, Mitsuba): the emitter's direction sampling, then an origin uniform on the disk
-        // of the scene's bounding sphere perpendicular to it, upstream of the scene.
+        // Infinite lights (pbrt, Mitsuba): the emitter's direction sampling, then an origin uniform on the
+        // disk of the scene's bounding sphere perpendicular to it, upstream of the scene.
         Interaction3f center;
         center.p = ctx.bounds.center;
         const auto [ds, weight] = emitter->sample_direction(center, u_direction);
         if (is_black(weight)) return;
         const float r = ctx.bounds.radius;
         const Vec2f disk = warp::square_to_uniform_disk_concentric(u_position);
-        const Vec3f origin = ctx.bounds.center + (Frame3f(ds.d).to_world(Vec3f(disk.x, disk.y, 0.f)) + ds.d) * r;
+        const Vec3f origin =
+            ctx.bounds.center + (Frame3f(ds.d).to_world(Vec3f(disk.x, disk.y, 0.f)) + ds.d) * r;
         ray = Ray(origin, -ds.d);
         light.infinite = true;
         light.d_env = ds.d;

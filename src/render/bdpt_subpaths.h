@@ -54,7 +54,8 @@ float scattering_density(const PathVertex& v, const Vec3f& w_prev, const PathVer
 
 // v as a light endpoint of `emitter`: the density of sampling v itself (position, or the direction of an
 // infinite light as seen from `next`), and of emitting toward `next`.
-float light_origin_density(const Scene& scene, const Emitter* emitter, const PathVertex& v, const PathVertex& next);
+float light_origin_density(const Scene& scene, const Emitter* emitter, const PathVertex& v,
+                           const PathVertex& next);
 float light_emission_density(const BDPTContext& ctx, const Emitter* emitter, const PathVertex& v,
                              const PathVertex& next, float ff);
 

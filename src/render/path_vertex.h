@@ -15,21 +15,21 @@ enum class VertexType { Camera, Light, Surface, Medium };
 
 struct PathVertex {
     VertexType type = VertexType::Surface;
-    Vec3f p;                      // position (a point on the sensor's lens / the emitter for endpoints)
-    Vec3f n;                      // geometric normal; zero for medium vertices and point-like endpoints
-    SurfaceInteraction3f si;      // the surface interaction (si.wi toward the previous subpath vertex)
-    Vec3f wi;                     // world direction toward the previous subpath vertex (zero at endpoints)
-    Vec3f d_env;                  // infinite vertices: the world direction from the scene toward the light
+    Vec3f p;                        // position (a point on the sensor's lens / the emitter for endpoints)
+    Vec3f n;                        // geometric normal; zero for medium vertices and point-like endpoints
+    SurfaceInteraction3f si;        // the surface interaction (si.wi toward the previous subpath vertex)
+    Vec3f wi;                       // world direction toward the previous subpath vertex (zero at endpoints)
+    Vec3f d_env;                    // infinite vertices: the world direction from the scene toward the light
     const Medium* medium = nullptr; // medium the vertex lies in (surfaces: the medium of the arriving ray)
     const Emitter* emitter = nullptr; // light endpoints, and surfaces (or escaped rays) that emit
-    Color3f beta{1.f, 1.f, 1.f}; // subpath throughput up to and including this vertex's sampling density
-    float pdf_fwd = 0.f;          // density of this vertex when sampled by its own subpath
-    float pdf_rev = 0.f;          // density of this vertex when sampled from the other side
+    Color3f beta{1.f, 1.f, 1.f};      // subpath throughput up to and including this vertex's sampling density
+    float pdf_fwd = 0.f;              // density of this vertex when sampled by its own subpath
+    float pdf_rev = 0.f;              // density of this vertex when sampled from the other side
     // Free-flight factors of the segment from the previous subpath vertex, in the walk's direction (part of
     // pdf_fwd) and in the reverse one (part of the previous vertex's pdf_rev); 1 in vacuum.
     float ff_fwd = 1.f, ff_rev = 1.f;
-    bool delta = false;           // sampled by a delta BSDF lobe (no other strategy can produce it)
-    bool infinite = false;        // an escaped camera ray (the environment) or an infinite light's endpoint
+    bool delta = false;    // sampled by a delta BSDF lobe (no other strategy can produce it)
+    bool infinite = false; // an escaped camera ray (the environment) or an infinite light's endpoint
 
     // Densities toward this vertex carry the |cos| of its normal (surfaces and area-light endpoints).
     bool on_surface() const { return !infinite && squared_norm(n) > 0.f; }
