@@ -22,6 +22,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <limits>
@@ -69,6 +70,10 @@ std::vector<Layer> BidirectionalPathTracer::render(const Scene& scene, const Ren
     const size_t max_camera = settings_.max_depth < 0 ? unlimited : size_t(settings_.max_depth) + 1;
     const size_t max_light = settings_.max_depth < 0 ? unlimited : size_t(settings_.max_depth);
 
+    // Infinite lights emit from a disk of the scene's bounding sphere, enlarged as the emitters do.
+    BoundingSphere bounds = scene.bounding_sphere();
+    bounds.radius = std::max(RayEpsilon, bounds.radius * (1.f + RayEpsilon));
+
     constexpr int n_chunks = 16;
     std::vector<Image> splats(n_chunks, Image(width, height));
     Image image(width, height);
@@ -82,7 +87,7 @@ std::vector<Layer> BidirectionalPathTracer::render(const Scene& scene, const Ren
         tbb::parallel_for(0, n_chunks, [&](int c) {
             Sampler sampler(*sensor.sampler, spp);
             RayCounter counter;
-            BDPTContext ctx{scene, settings_, sampler, counter, has_media, scene.bounding_sphere()};
+            BDPTContext ctx{scene, settings_, sampler, counter, has_media, bounds};
             std::vector<PathVertex> camera, light;
             uint64_t local_dropped = 0;
             const uint64_t begin = n_pixels * c / n_chunks, end = n_pixels * (c + 1) / n_chunks;
