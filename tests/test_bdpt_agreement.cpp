@@ -5,6 +5,10 @@
 // |z| > 4.5) ~ 3e-3: larger values mean bias, not bad luck (the seeds are fixed, so a pass is reproducible).
 #include "test_bdpt_util.h"
 
+#include "core/image.h"
+
+#include <filesystem>
+
 using namespace penumbra;
 using namespace penumbra::test;
 
@@ -117,6 +121,31 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"directional", directional_light, 16, 8}, Case{"environment", environment, 16, 8},
                       Case{"glass", glass_sphere, 16, 8}, Case{"thinlens", thinlens, 16, 8}),
     [](const auto& info) { return std::string(info.param.name); });
+
+// An importance-sampled environment map (a bright sun over a sky gradient): the light subpaths' direction
+// density and the emitter's sampling density enter the MIS weights.
+TEST(BDPTvsPathEnvmap, SameImage) {
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() / "penumbra_test_bdpt_envmap";
+    std::filesystem::create_directories(dir);
+    Image sky(16, 8);
+    for (int y = 0; y < sky.height; ++y)
+        for (int x = 0; x < sky.width; ++x)
+            sky.at(x, y) = Color3f(0.2f + 0.1f * float(y), 0.3f, 0.5f - 0.05f * float(y));
+    sky.at(5, 2) = Color3f(60.f, 55.f, 40.f);
+    write_image((dir / "sky.exr").string(), sky);
+    const std::string env =
+        "<emitter type=\"envmap\"><string name=\"filename\" value=\"sky.exr\"/></emitter>";
+    const auto path = load_scene_string(open_scene(integrator_xml("path"), env), dir.string());
+    const auto bdpt = load_scene_string(open_scene(integrator_xml("bdpt"), env), dir.string());
+    std::filesystem::remove_all(dir);
+    const BlockStats a = block_stats(*bdpt, 12, 8, 1);
+    const BlockStats b = block_stats(*path, 12, 16, 100001);
+    const std::vector<double> z = z_scores(a, b);
+    std::printf("[bdpt vs path] envmap: image mean %.5f vs %.5f, z = %.2f, max block |z| = %.2f\n", a.mean[0],
+                b.mean[0], z[0], max_abs(z, 1));
+    EXPECT_LT(std::abs(z[0]), 4.0);
+    EXPECT_LT(max_abs(z, 1), 4.5);
+}
 
 // Light tracing on both sides: bdpt's splats (t = 1) and ptracer's normalize alike through a wide filter.
 TEST(BDPTvsParticleTracer, SameImageWithGaussianFilter) {
