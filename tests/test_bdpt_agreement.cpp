@@ -147,6 +147,23 @@ TEST(BDPTvsPathEnvmap, SameImage) {
     EXPECT_LT(max_abs(z, 1), 4.5);
 }
 
+// A radiance meter cannot be reached by light tracing: the other strategies must carry the whole weight.
+TEST(BDPTvsPathMeter, SameRadiance) {
+    const std::string meter =
+        "<sensor type=\"radiancemeter\"><point name=\"origin\" value=\"0,0,-0.9\"/><vector "
+        "name=\"direction\" value=\"0.2,-0.3,1\"/><sampler type=\"independent\"/><film "
+        "type=\"hdrfilm\"><integer name=\"width\" value=\"1\"/><integer name=\"height\" "
+        "value=\"1\"/><rfilter type=\"box\"/></film></sensor>";
+    const auto path = load_scene_string(box_scene(integrator_xml("path"), kCeilingLight, meter));
+    const auto bdpt = load_scene_string(box_scene(integrator_xml("bdpt"), kCeilingLight, meter));
+    const BlockStats a = block_stats(*bdpt, 12, 256, 1);
+    const BlockStats b = block_stats(*path, 12, 512, 100001);
+    const std::vector<double> z = z_scores(a, b);
+    std::printf("[bdpt vs path] radiancemeter: %.5f vs %.5f, z = %.2f\n", a.mean[0], b.mean[0], z[0]);
+    EXPECT_GT(a.mean[0], 0.0);
+    EXPECT_LT(std::abs(z[0]), 4.0);
+}
+
 // Light tracing on both sides: bdpt's splats (t = 1) and ptracer's normalize alike through a wide filter.
 TEST(BDPTvsParticleTracer, SameImageWithGaussianFilter) {
     const std::string sensor = bdpt_sensor("perspective", kInsideBox, 70.f, 24, "", "gaussian");

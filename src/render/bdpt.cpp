@@ -18,6 +18,7 @@
 #include "core/interrupt.h"
 #include "core/stratified.h"
 #include "render/bdpt_connect.h"
+#include "scene/sensors/sensor_common.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -66,6 +67,7 @@ std::vector<Layer> BidirectionalPathTracer::render(const Scene& scene, const Ren
     const int spp = sensor.sampler->effective_spp(options.spp);
     const uint64_t n_pixels = uint64_t(width) * height;
     const bool has_media = scene_has_media(scene);
+    const bool sensor_connects = dynamic_cast<const MeterSensor*>(&sensor) == nullptr;
     const size_t unlimited = std::numeric_limits<size_t>::max();
     const size_t max_camera = settings_.max_depth < 0 ? unlimited : size_t(settings_.max_depth) + 1;
     const size_t max_light = settings_.max_depth < 0 ? unlimited : size_t(settings_.max_depth);
@@ -87,7 +89,7 @@ std::vector<Layer> BidirectionalPathTracer::render(const Scene& scene, const Ren
         tbb::parallel_for(0, n_chunks, [&](int c) {
             Sampler sampler(*sensor.sampler, spp);
             RayCounter counter;
-            BDPTContext ctx{scene, settings_, sampler, counter, has_media, bounds};
+            BDPTContext ctx{scene, settings_, sampler, counter, has_media, sensor_connects, bounds};
             std::vector<PathVertex> camera, light;
             uint64_t local_dropped = 0;
             const uint64_t begin = n_pixels * c / n_chunks, end = n_pixels * (c + 1) / n_chunks;

@@ -168,9 +168,9 @@ Color3f connect_subpaths(BDPTContext& ctx, const std::vector<PathVertex>& camera
             const int segments = s + t - 1;
             if (segments < 1 || segments > max_segments || (t == 1 && (s == 0 || s > n_light))) continue;
             if (segments == 1 && settings.hide_emitters) continue;
-            if (t == 1)
-                light_tracing(ctx, light, s, splats);
-            else if (s == 0)
+            if (t == 1) {
+                if (ctx.sensor_connects) light_tracing(ctx, light, s, splats);
+            } else if (s == 0)
                 L += emission_hit(ctx, camera, t);
             else if (s == 1)
                 L += next_event(ctx, camera, t);

@@ -56,11 +56,11 @@ float mis_weight(const BDPTContext& ctx, const Strategy& st) {
     delta[s] = false;
 
     // Strategy i connects x_{i-1} and x_i (i = 0: the camera subpath reaches the light). t = 0 is not used
-    // (the sensor cannot be hit); the light seen by the camera through light tracing (i = 1, n = 2) only for
-    // area lights; delta vertices cannot be connected, delta lights cannot be hit.
+    // (the sensor cannot be hit), nor t = 1 for meters; the light seen by the camera through light tracing
+    // (i = 1, n = 2) only for area lights; delta vertices cannot be connected, delta lights cannot be hit.
     const bool area_light = st.emitter->shape() != nullptr;
     auto usable = [&](int i) {
-        if (i >= n) return false;
+        if (i >= n || (i == n - 1 && !ctx.sensor_connects)) return false;
         if (i == 0) return !st.emitter->is_delta();
         if (i == 1 && n == 2) return area_light;
         return !delta[size_t(i - 1)] && !delta[size_t(i)];

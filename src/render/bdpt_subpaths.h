@@ -26,6 +26,7 @@ struct BDPTContext {
     Sampler& sampler;
     RayCounter& rays;
     bool has_media;        // some shape or the sensor declares a medium
+    bool sensor_connects;  // scene points can be connected to the sensor (not a radiance/irradiance meter)
     BoundingSphere bounds; // the disk infinite lights emit from has this radius
 };
 
