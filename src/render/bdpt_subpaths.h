@@ -45,8 +45,8 @@ std::pair<float, float> connection_free_flight(BDPTContext& ctx, const PathVerte
 Vec3f direction_to(const PathVertex& from, const PathVertex& to);
 
 // Solid-angle density pdf_dir at `from` toward `to`, converted to `to`'s measure times the free-flight factor
-// ff (Eq. 10.8); kept in solid angle for an infinite `to`. From an infinite light, pdf_dir is the density on
-// the emission disk (parallel rays: only |cos| at `to`).
+// ff (p_A = p_σ |cos θ'| / d²); kept in solid angle for an infinite `to`. From an infinite light, pdf_dir is
+// the density on the emission disk (parallel rays: only |cos| at `to`).
 float to_area_density(const PathVertex& from, const PathVertex& to, float pdf_dir, float ff);
 
 // Density with which the subpath through prev → v would sample `next` (v a surface or medium vertex).
