@@ -2,17 +2,18 @@
 // sample traces a camera subpath and a light subpath and combines every (s, t) connection with multiple
 // importance sampling; surfaces and participating media (homogeneous or not) alike.
 //
-// | parameter      | type    | default | meaning                                                          |
-// |----------------|---------|---------|------------------------------------------------------------------|
-// | max_depth      | integer | -1      | longest path depth in segments (-1 = infinite, 1 = visible emitters)
-// | | rr_depth       | integer | 5       | subpath depth at which Russian roulette starts | | hide_emitters
-// | boolean | false   | do not show directly visible emitters                            | | heuristic      |
-// string  | power   | MIS weights: `power` (exponent 2) or `balance` heuristic          |
+// | parameter     | type    | default | meaning                                                         |
+// |---------------|---------|---------|-----------------------------------------------------------------|
+// | max_depth     | integer | -1      | longest path in segments (-1 = infinite, 1 = visible emitters)  |
+// | rr_depth      | integer | 5       | subpath depth at which Russian roulette starts                  |
+// | hide_emitters | boolean | false   | do not show directly visible emitters                           |
+// | heuristic     | string  | power   | MIS weights: `power` (exponent 2) or `balance` heuristic        |
+// | strategy_s    | integer | -1      | with strategy_t: render only the (s, t) strategy, without MIS   |
+// | strategy_t    | integer | -1      | weights (one technique alone: paths of s + t - 1 segments)      |
 //
 // Light tracing (t = 1) splats into the film like `ptracer`. Media attached to emitters are found from the
 // first surface declaring media along the emitted ray (vacuum if there is none, or the sensor's medium when
-// no shape declares media). Media's
-// `sample_emitters` is ignored: every strategy is always used.
+// no shape declares media). Media's `sample_emitters` is ignored: every strategy is always used.
 #include "render/bdpt.h"
 
 #include "core/interrupt.h"
@@ -42,6 +43,13 @@ BidirectionalPathTracer::BidirectionalPathTracer(const Properties& props) {
         settings_.heuristic = MISHeuristic::Balance;
     else
         props.raise("heuristic", "must be 'power' or 'balance', got '" + heuristic + "'");
+    settings_.strategy_s = int(props.get_int("strategy_s", -1));
+    settings_.strategy_t = int(props.get_int("strategy_t", -1));
+    if ((settings_.strategy_s < 0) != (settings_.strategy_t < 0))
+        props.raise(settings_.strategy_s < 0 ? "strategy_s" : "strategy_t",
+                    "strategy_s and strategy_t select one strategy together");
+    if (settings_.strategy_t == 0 || (settings_.strategy_s == 0 && settings_.strategy_t == 1))
+        props.raise("strategy_t", "the strategy needs t >= 1 camera vertices and s + t >= 2");
     if (settings_.max_depth < -1) props.raise("max_depth", "must be -1 (infinite) or non-negative");
     if (settings_.rr_depth <= 0) props.raise("rr_depth", "must be positive");
 }

@@ -168,6 +168,7 @@ Color3f connect_subpaths(BDPTContext& ctx, const std::vector<PathVertex>& camera
             const int segments = s + t - 1;
             if (segments < 1 || segments > max_segments || (t == 1 && (s == 0 || s > n_light))) continue;
             if (segments == 1 && settings.hide_emitters) continue;
+            if (settings.strategy_s >= 0 && (s != settings.strategy_s || t != settings.strategy_t)) continue;
             if (t == 1) {
                 if (ctx.sensor_connects) light_tracing(ctx, light, s, splats);
             } else if (s == 0)

@@ -13,6 +13,7 @@ float ratio(float num, float den) { return (num != 0.f ? num : 1.f) / (den != 0.
 
 float mis_weight(const BDPTContext& ctx, const Strategy& st) {
     const int s = st.s, t = st.t, n = s + t; // x_0 ... x_{n-1}, light end first
+    if (ctx.settings.strategy_s >= 0) return 1.f;
     auto vertex = [&](int i) -> const PathVertex& {
         if (i < s) return (i == 0 && st.light_sample) ? *st.light_sample : (*st.light)[size_t(i)];
         const int j = n - 1 - i;

@@ -17,6 +17,7 @@ struct BDPTSettings {
     int rr_depth = 5;
     bool hide_emitters = false;
     MISHeuristic heuristic = MISHeuristic::Power;
+    int strategy_s = -1, strategy_t = -1; // >= 0: only this strategy, unweighted (a view of one technique)
 };
 
 // What one sample's walks and connections share.
