@@ -61,7 +61,9 @@ float mis_weight(const BDPTContext& ctx, const Strategy& st) {
     // (i = 1, n = 2) only for area lights; delta vertices cannot be connected, delta lights cannot be hit.
     const bool area_light = st.emitter->shape() != nullptr;
     auto usable = [&](int i) {
-        if (i >= n || (i == n - 1 && !ctx.sensor_connects)) return false;
+        // t = 1 needs the vertex next to the sensor to project onto the image (within the clip range).
+        if (i >= n || (i == n - 1 && (!ctx.sensor_connects || !(from_camera[size_t(n - 2)] > 0.f))))
+            return false;
         if (i == 0) return !st.emitter->is_delta();
         if (i == 1 && n == 2) return area_light;
         return !delta[size_t(i - 1)] && !delta[size_t(i)];
