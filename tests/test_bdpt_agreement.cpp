@@ -56,6 +56,7 @@ struct Case {
     const char* name;
     std::string (*scene)(const std::string& integrator);
     int spp_path, spp_bdpt;
+    std::string params = ""; // integrator parameters shared by path and bdpt
 };
 
 std::string cbox(const std::string& i) { return box_scene(i, kCeilingLight); }
@@ -102,8 +103,8 @@ class BDPTvsPath : public ::testing::TestWithParam<Case> {};
 
 TEST_P(BDPTvsPath, SameImage) {
     const Case& c = GetParam();
-    const auto path = load_scene_string(c.scene(integrator_xml("path")));
-    const auto bdpt = load_scene_string(c.scene(integrator_xml("bdpt")));
+    const auto path = load_scene_string(c.scene(integrator_xml("path", c.params)));
+    const auto bdpt = load_scene_string(c.scene(integrator_xml("bdpt", c.params)));
     const BlockStats a = block_stats(*bdpt, 12, c.spp_bdpt, 1);
     const BlockStats b = block_stats(*path, 12, c.spp_path, 100001);
     const std::vector<double> z = z_scores(a, b);
@@ -119,7 +120,10 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(Case{"cbox", cbox, 16, 8}, Case{"point", point_light, 16, 8},
                       Case{"spot", spot_light, 16, 8}, Case{"projector", projector, 32, 16},
                       Case{"directional", directional_light, 16, 8}, Case{"environment", environment, 16, 8},
-                      Case{"glass", glass_sphere, 16, 8}, Case{"thinlens", thinlens, 16, 8}),
+                      Case{"glass", glass_sphere, 32, 16}, Case{"thinlens", thinlens, 16, 8},
+                      Case{"hide_emitters", environment, 16, 8,
+                           "<boolean name=\"hide_emitters\" value=\"true\"/>"},
+                      Case{"max_depth_3", cbox, 16, 8, "<integer name=\"max_depth\" value=\"3\"/>"}),
     [](const auto& info) { return std::string(info.param.name); });
 
 // An importance-sampled environment map (a bright sun over a sky gradient): the light subpaths' direction
