@@ -70,6 +70,7 @@ void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, 
     const BSDFContext bsdf_ctx{mode};
     thread_local std::vector<Piece> pieces;
     float eta = 1.f;
+    const float start = max_component(beta), rr_scale = start > 0.f ? 1.f / start : 1.f;
     while (path.size() < max_vertices) {
         // Follow the ray to the next vertex, through null surfaces, sampling free flights.
         pieces.clear();
@@ -172,9 +173,10 @@ void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, 
         }
         path[prev_index].pdf_rev = to_area_density(cur, path[prev_index], pdf_rev_dir, cur.ff_rev);
 
-        // Russian roulette (path: Mitsuba 3's survival probability with the eta² factor; ptracer's without).
+        // Russian roulette: Mitsuba 3's survival probability min(max(beta) eta², 0.95), with beta relative to
+        // the subpath's starting throughput (a light subpath starts at L_e / p, which would keep q at 0.95).
         if (path.size() - 1 >= size_t(c.settings.rr_depth)) {
-            const float q = std::min(max_component(beta) * eta * eta, 0.95f);
+            const float q = std::min(max_component(beta) * rr_scale * eta * eta, 0.95f);
             if (ctx.sampler.next_1d() >= q) return;
             beta /= q;
         }
