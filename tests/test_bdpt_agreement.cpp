@@ -99,6 +99,15 @@ std::string thinlens(const std::string& i) {
 
 void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
 
+std::string orthographic(const std::string& i) {
+    return box_scene(i, kCeilingLight,
+                     "<sensor type=\"orthographic\"><transform name=\"to_world\"><scale value=\"0.8\"/>" +
+                         kInsideBox +
+                         "</transform><sampler type=\"independent\"/><film type=\"hdrfilm\"><integer "
+                         "name=\"width\" value=\"24\"/><integer name=\"height\" value=\"24\"/><rfilter "
+                         "type=\"box\"/></film></sensor>");
+}
+
 class BDPTvsPath : public ::testing::TestWithParam<Case> {};
 
 TEST_P(BDPTvsPath, SameImage) {
@@ -121,6 +130,7 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"spot", spot_light, 16, 8}, Case{"projector", projector, 32, 16},
                       Case{"directional", directional_light, 16, 8}, Case{"environment", environment, 16, 8},
                       Case{"glass", glass_sphere, 32, 16}, Case{"thinlens", thinlens, 16, 8},
+                      Case{"orthographic", orthographic, 16, 8},
                       Case{"hide_emitters", environment, 16, 8,
                            "<boolean name=\"hide_emitters\" value=\"true\"/>"},
                       Case{"max_depth_3", cbox, 16, 8, "<integer name=\"max_depth\" value=\"3\"/>"}),

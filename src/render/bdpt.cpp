@@ -42,16 +42,17 @@ BidirectionalPathTracer::BidirectionalPathTracer(const Properties& props) {
     else if (heuristic == "balance")
         settings_.heuristic = MISHeuristic::Balance;
     else
-        props.raise("heuristic", "must be 'power' or 'balance', got '" + heuristic + "'");
+        props.raise("heuristic", "'heuristic' must be 'power' or 'balance', got '" + heuristic + "'");
     settings_.strategy_s = int(props.get_int("strategy_s", -1));
     settings_.strategy_t = int(props.get_int("strategy_t", -1));
     if ((settings_.strategy_s < 0) != (settings_.strategy_t < 0))
         props.raise(settings_.strategy_s < 0 ? "strategy_s" : "strategy_t",
-                    "strategy_s and strategy_t select one strategy together");
+                    "'strategy_s' and 'strategy_t' select one strategy together");
     if (settings_.strategy_t == 0 || (settings_.strategy_s == 0 && settings_.strategy_t == 1))
-        props.raise("strategy_t", "the strategy needs t >= 1 camera vertices and s + t >= 2");
-    if (settings_.max_depth < -1) props.raise("max_depth", "must be -1 (infinite) or non-negative");
-    if (settings_.rr_depth <= 0) props.raise("rr_depth", "must be positive");
+        props.raise("strategy_t", "'strategy_t' must be >= 1 (camera vertices), with s + t >= 2");
+    if (settings_.max_depth < -1)
+        props.raise("max_depth", "'max_depth' must be -1 (infinite) or non-negative");
+    if (settings_.rr_depth <= 0) props.raise("rr_depth", "'rr_depth' must be positive");
 }
 
 namespace {
