@@ -82,7 +82,8 @@ class ProjectorEmitter final : public EmitterBase<ProjectorEmitter> {
         const Vec3f d = normalize(to_world_.apply_vector(q));
         return {Ray(position_, d), irradiance_->eval(si) * (scale_ * Pi * plane_area_)};
     }
-    // The plane point q = d / d.z has area density 1 / A, and dA = |q|³ dω: pdf_ω = 1 / (A d.z³) in the frustum.
+    // The plane point q = d / d.z has area density 1 / A and dA = |q|³ dω: pdf_ω = 1 / (A d.z³) in the
+    // frustum (d local and unit).
     float pdf_emission_direction(const Vec3f& d) const override {
         const Vec3f local = normalize(to_local_.apply_vector(d));
         if (!(local.z > 0.f)) return 0.f;
