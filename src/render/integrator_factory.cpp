@@ -1,4 +1,5 @@
 #include "render/aov.h"
+#include "render/bdpt.h"
 #include "render/direct.h"
 #include "render/moment.h"
 #include "render/path.h"
@@ -12,6 +13,7 @@ std::shared_ptr<Object> make_integrator(const Properties& props, const LoadConte
     const std::string& type = props.plugin();
     if (type == "path") return std::make_shared<PathIntegrator>(props);
     if (type == "direct") return std::make_shared<DirectIntegrator>(props);
+    if (type == "bdpt") return std::make_shared<BidirectionalPathTracer>(props);
     if (type == "ptracer") return std::make_shared<ParticleTracer>(props);
     if (type == "volpath") return std::make_shared<VolPathIntegrator>(props, SpectralMIS::PerSegment);
     if (type == "volpathmis") return std::make_shared<VolPathIntegrator>(props, SpectralMIS::PerPath);

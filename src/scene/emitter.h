@@ -39,6 +39,9 @@ public:
 
     // Light tracing: sample an emitted ray; the weight is L_e * cos / (pdf_position * pdf_direction).
     virtual std::pair<Ray, Color3f> sample_ray(const Vec2f& u_position, const Vec2f& u_direction) const = 0;
+    // Delta-position emitters (point, spot, projector): the solid-angle density with which sample_ray() emits
+    // the world direction d (bidirectional MIS needs it for directions it did not sample). 0 for the others.
+    virtual float pdf_emission_direction(const Vec3f&) const { return 0.f; }
 
 #define PENUMBRA_EMITTER_METHODS(T)                                                                          \
     /* Solid-angle density of sample_direction() having produced `ds` from `ref` (0 for delta emitters). */  \

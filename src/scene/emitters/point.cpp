@@ -31,6 +31,7 @@ public:
     std::pair<Ray, Color3f> sample_ray(const Vec2f&, const Vec2f& u_direction) const override {
         return {Ray(position_, warp::square_to_uniform_sphere(u_direction)), intensity_ * (4.f * Pi)};
     }
+    float pdf_emission_direction(const Vec3f&) const override { return warp::square_to_uniform_sphere_pdf(); }
 
     template <typename T> T pdf_direction_t(const Interaction<T>&, const DirectionSample<T>&) const { return T(0); }
     template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>&) const { return Color3<T>(T(0)); }

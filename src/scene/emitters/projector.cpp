@@ -82,6 +82,15 @@ class ProjectorEmitter final : public EmitterBase<ProjectorEmitter> {
         const Vec3f d = normalize(to_world_.apply_vector(q));
         return {Ray(position_, d), irradiance_->eval(si) * (scale_ * Pi * plane_area_)};
     }
+    // The plane point q = d / d.z has area density 1 / A and dA = |q|³ dω: pdf_ω = 1 / (A d.z³) in the
+    // frustum (d local and unit).
+    float pdf_emission_direction(const Vec3f& d) const override {
+        const Vec3f local = normalize(to_local_.apply_vector(d));
+        if (!(local.z > 0.f)) return 0.f;
+        const Vec2f uv = image_uv(local);
+        if (!(uv.x >= 0.f && uv.x <= 1.f && uv.y >= 0.f && uv.y <= 1.f)) return 0.f;
+        return 1.f / (plane_area_ * local.z * local.z * local.z);
+    }
 
     template <typename T> T pdf_direction_t(const Interaction<T>&, const DirectionSample<T>&) const {
         return T(0);

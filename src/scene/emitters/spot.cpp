@@ -71,6 +71,10 @@ public:
         return {Ray(position_, d),
                 intensity_ * profile(local) / warp::square_to_uniform_cone_pdf(cos_cutoff_)};
     }
+    float pdf_emission_direction(const Vec3f& d) const override {
+        const Vec3f local = normalize(to_world_.inverse().apply_vector(d));
+        return local.z >= cos_cutoff_ ? warp::square_to_uniform_cone_pdf(cos_cutoff_) : 0.f;
+    }
 
     template <typename T> T pdf_direction_t(const Interaction<T>&, const DirectionSample<T>&) const { return T(0); }
     template <typename T> Color3<T> eval_t(const SurfaceInteraction<T>&) const { return Color3<T>(T(0)); }

@@ -1,0 +1,151 @@
+// `bdpt`: bidirectional path tracing (Veach 1997, ch. 10; Mitsuba 0.6's and pbrt-v3's `bdpt`). Each camera
+// sample traces a camera subpath and a light subpath and combines every (s, t) connection with multiple
+// importance sampling; surfaces and participating media (homogeneous or not) alike.
+//
+// | parameter     | type    | default | meaning                                                         |
+// |---------------|---------|---------|-----------------------------------------------------------------|
+// | max_depth     | integer | -1      | longest path in segments (-1 = infinite, 1 = visible emitters)  |
+// | rr_depth      | integer | 5       | subpath depth at which Russian roulette starts                  |
+// | hide_emitters | boolean | false   | do not show directly visible emitters                           |
+// | heuristic     | string  | power   | MIS weights: `power` (exponent 2) or `balance` heuristic        |
+// | strategy_s    | integer | -1      | with strategy_t: render only the (s, t) strategy, without MIS   |
+// | strategy_t    | integer | -1      | weights (one technique alone: paths of s + t - 1 segments)      |
+//
+// Light tracing (t = 1) splats into the film like `ptracer`. Media attached to emitters are found from the
+// first surface declaring media along the emitted ray (vacuum if there is none, or the sensor's medium when
+// no shape declares media). Media's `sample_emitters` is ignored: every strategy is always used.
+#include "render/bdpt.h"
+
+#include "core/interrupt.h"
+#include "core/stratified.h"
+#include "render/bdpt_connect.h"
+#include "scene/sensors/sensor_common.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <limits>
+#include <mutex>
+
+namespace penumbra {
+
+BidirectionalPathTracer::BidirectionalPathTracer(const Properties& props) {
+    settings_.max_depth = int(props.get_int("max_depth", -1));
+    settings_.rr_depth = int(props.get_int("rr_depth", 5));
+    settings_.hide_emitters = props.get_bool("hide_emitters", false);
+    const std::string heuristic = props.get_string("heuristic", "power");
+    if (heuristic == "power")
+        settings_.heuristic = MISHeuristic::Power;
+    else if (heuristic == "balance")
+        settings_.heuristic = MISHeuristic::Balance;
+    else
+        props.raise("heuristic", "'heuristic' must be 'power' or 'balance', got '" + heuristic + "'");
+    settings_.strategy_s = int(props.get_int("strategy_s", -1));
+    settings_.strategy_t = int(props.get_int("strategy_t", -1));
+    if ((settings_.strategy_s < 0) != (settings_.strategy_t < 0))
+        props.raise(settings_.strategy_s < 0 ? "strategy_s" : "strategy_t",
+                    "'strategy_s' and 'strategy_t' select one strategy together");
+    if (settings_.strategy_t == 0 || (settings_.strategy_s == 0 && settings_.strategy_t == 1))
+        props.raise("strategy_t", "'strategy_t' must be >= 1 (camera vertices), with s + t >= 2");
+    if (settings_.max_depth < -1)
+        props.raise("max_depth", "'max_depth' must be -1 (infinite) or non-negative");
+    if (settings_.rr_depth <= 0) props.raise("rr_depth", "'rr_depth' must be positive");
+}
+
+namespace {
+
+bool scene_has_media(const Scene& scene) {
+    if (scene.sensor->medium) return true;
+    for (const auto& shape : scene.shapes)
+        if (shape->interior || shape->exterior) return true;
+    return false;
+}
+
+} // namespace
+
+// Pixels are split into a fixed number of chunks, each with its own light-tracing film, summed in chunk
+// order: the image is bit-identical for a given seed whatever the thread count.
+std::vector<Layer> BidirectionalPathTracer::render(const Scene& scene, const RenderOptions& options,
+                                                   RenderStats& stats) const {
+    const Sensor& sensor = *scene.sensor;
+    const Film& film = *sensor.film;
+    const int width = film.width, height = film.height;
+    const int spp = sensor.sampler->effective_spp(options.spp);
+    const uint64_t n_pixels = uint64_t(width) * height;
+    const bool has_media = scene_has_media(scene);
+    const bool sensor_connects = dynamic_cast<const MeterSensor*>(&sensor) == nullptr;
+    const size_t unlimited = std::numeric_limits<size_t>::max();
+    const size_t max_camera = settings_.max_depth < 0 ? unlimited : size_t(settings_.max_depth) + 1;
+    const size_t max_light = settings_.max_depth < 0 ? unlimited : size_t(settings_.max_depth);
+
+    // Infinite lights emit from a disk of the scene's bounding sphere, enlarged as the emitters do.
+    BoundingSphere bounds = scene.bounding_sphere();
+    bounds.radius = std::max(RayEpsilon, bounds.radius * (1.f + RayEpsilon));
+
+    constexpr int n_chunks = 16;
+    std::vector<Image> splats(n_chunks, Image(width, height));
+    Image image(width, height);
+    std::atomic<uint64_t> rays{0}, done{0}, dropped{0};
+    std::mutex progress_mutex;
+    const auto start = std::chrono::steady_clock::now();
+
+    const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+        tbb::parallel_for(0, n_chunks, [&](int c) {
+            Sampler sampler(*sensor.sampler, spp);
+            RayCounter counter;
+            BDPTContext ctx{scene, settings_, sampler, counter, has_media, sensor_connects, bounds};
+            std::vector<PathVertex> camera, light;
+            uint64_t local_dropped = 0;
+            const uint64_t begin = n_pixels * c / n_chunks, end = n_pixels * (c + 1) / n_chunks;
+            for (uint64_t pixel = begin; pixel < end; ++pixel) {
+                check_interrupt();
+                const int x = int(pixel % width), y = int(pixel / width);
+                Color3f sum(0.f);
+                for (int s = 0; s < spp; ++s) {
+                    sampler.start(options.seed, pixel, uint64_t(s));
+                    const Vec2f u = sampler.next_2d();
+                    const Vec2f pos = film.sample_position(
+                        x, y, options.stratified ? PixelStratum(s, spp, options.seed, pixel)(u) : u);
+                    const Vec2f u_aperture = sampler.next_2d();
+                    const auto [ray, weight] = sensor.sample_ray(pos, u_aperture);
+                    ++counter.rays;
+                    camera_subpath(ctx, ray, u_aperture, camera, max_camera);
+                    light_subpath(ctx, light, max_light);
+                    const Color3f L = connect_subpaths(ctx, camera, light, splats[size_t(c)]);
+                    if (is_finite(L))
+                        sum += L * weight;
+                    else
+                        ++local_dropped;
+                }
+                image.at(x, y) = sum / float(spp);
+                const uint64_t finished = ++done;
+                if (options.progress && (finished % 256 == 0 || finished == n_pixels)) {
+                    std::lock_guard<std::mutex> lock(progress_mutex);
+                    options.progress(float(double(finished) / double(n_pixels)));
+                }
+            }
+            rays += counter.rays;
+            dropped += local_dropped;
+        });
+    });
+
+    // Light tracing estimates ∫ f(x - x_j) W_e L with W_e normalized over the image: scale by the image's
+    // pixels over the number of light subpaths (one per camera sample), i.e. 1 / spp.
+    const float scale = 1.f / float(spp);
+    for (const Image& chunk : splats)
+        for (size_t i = 0; i < image.pixels.size(); ++i)
+            image.pixels[i] += chunk.pixels[i] * scale;
+
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    stats.samples = n_pixels * uint64_t(spp);
+    stats.rays = rays;
+    stats.dropped_samples = dropped;
+    return {Layer{"", std::move(image)}};
+}
+
+} // namespace penumbra

@@ -1,0 +1,17 @@
+#pragma once
+#include "render/bdpt_subpaths.h"
+
+namespace penumbra {
+
+// Veach's bidirectional path tracer (render/bdpt.cpp).
+class BidirectionalPathTracer final : public Integrator {
+  public:
+    explicit BidirectionalPathTracer(const Properties& props);
+    std::vector<Layer> render(const Scene& scene, const RenderOptions& options,
+                              RenderStats& stats) const override;
+
+  private:
+    BDPTSettings settings_;
+};
+
+} // namespace penumbra
