@@ -147,8 +147,17 @@ TEST(MediaAgreement, HeterogeneousGridBehindNullBoundary) {
     expect_agree(ref, estimate(xml, "ptracer", 32), "grid: ptracer vs volpath");
 }
 
-// The camera and a spot light sit in haze that fills a closed room (the sensor's and the emitter's media).
+// The camera sits in haze that fills a closed room (the sensor's medium); a spot and a point light sit in
+// small vacuum bubbles inside it, whose media the integrators find from the sensor (render/light_medium.h).
+// The bubbles keep medium points away from the lights: next-event estimation from medium points arbitrarily
+// close to a point light has infinite variance (∫ d⁻⁴ d² dd diverges), which would make the standard errors
+// meaningless; for the same reason ptracer is not compared here (a pinhole camera inside a scattering medium
+// receives W/d² from points arbitrarily close to it).
 TEST(MediaAgreement, SpotAndPointLightsInHaze) {
+    auto bubble = [](const std::string& center) {
+        return R"(<shape type="sphere"><point name="center" value=")" + center +
+               R"("/><float name="radius" value="0.2"/><bsdf type="null"/><ref name="exterior" id="haze"/></shape>)";
+    };
     const std::string xml =
         R"(<scene version="3.0.0"><integrator type="$integrator"><integer name="max_depth" value="5"/></integrator>
   <medium type="homogeneous" id="haze"><rgb name="sigma_t" value="0.4"/><rgb name="albedo" value="0.8"/>
@@ -156,15 +165,14 @@ TEST(MediaAgreement, SpotAndPointLightsInHaze) {
         camera(R"(<ref name="medium" id="haze"/>)", R"(<lookat origin="0, 0, 1.5" target="0, -0.3, 0" up="0, 1, 0"/>)") + R"(
   <shape type="cube"><transform name="to_world"><scale value="2"/></transform>
     <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></bsdf>
-    <ref name="interior" id="haze"/></shape>
+    <ref name="interior" id="haze"/></shape>)" + bubble("0.5, 1.5, 0") + bubble("-1.2, -1.2, -1.2") + R"(
   <emitter type="spot"><transform name="to_world"><lookat origin="0.5, 1.5, 0" target="0, -2, 0" up="0, 0, 1"/></transform>
-    <rgb name="intensity" value="10"/><float name="cutoff_angle" value="25"/><ref name="medium" id="haze"/></emitter>
-  <emitter type="point"><point name="position" value="-1, -1, -1"/><rgb name="intensity" value="3, 2, 1"/>
-    <ref name="medium" id="haze"/></emitter>
+    <rgb name="intensity" value="10"/><float name="cutoff_angle" value="25"/></emitter>
+  <emitter type="point"><point name="position" value="-1.2, -1.2, -1.2"/><rgb name="intensity" value="3, 2, 1"/></emitter>
 </scene>)";
     const Estimate ref = estimate(xml, "volpath", 32);
+    expect_agree(ref, estimate(xml, "volpathmis", 32), "haze, spot + point: volpathmis vs volpath");
     expect_agree(ref, estimate(xml, "bdpt", 8), "haze, spot + point: bdpt vs volpath");
-    expect_agree(ref, estimate(xml, "ptracer", 32), "haze, spot + point: ptracer vs volpath");
 }
 
 // A glass sphere filled with a scattering medium under a constant environment (dielectric boundary).

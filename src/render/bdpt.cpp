@@ -11,14 +11,15 @@
 // | strategy_s    | integer | -1      | with strategy_t: render only the (s, t) strategy, without MIS   |
 // | strategy_t    | integer | -1      | weights (one technique alone: paths of s + t - 1 segments)      |
 //
-// Light tracing (t = 1) splats into the film like `ptracer`. Media attached to emitters are found from the
-// first surface declaring media along the emitted ray (vacuum if there is none, or the sensor's medium when
-// no shape declares media). Media's `sample_emitters` is ignored: every strategy is always used.
+// Light tracing (t = 1) splats into the film like `ptracer`. Light subpaths start in the medium of
+// render/light_medium.h (the emitter's nested medium, an area light's exterior, else found from the sensor),
+// the rule ptracer follows. Media's `sample_emitters` is ignored: every strategy is always used.
 #include "render/bdpt.h"
 
 #include "core/interrupt.h"
 #include "core/stratified.h"
 #include "render/bdpt_connect.h"
+#include "render/light_medium.h"
 #include "scene/sensors/sensor_common.h"
 
 #include <tbb/parallel_for.h>
@@ -54,17 +55,6 @@ BidirectionalPathTracer::BidirectionalPathTracer(const Properties& props) {
         props.raise("max_depth", "'max_depth' must be -1 (infinite) or non-negative");
     if (settings_.rr_depth <= 0) props.raise("rr_depth", "'rr_depth' must be positive");
 }
-
-namespace {
-
-bool scene_has_media(const Scene& scene) {
-    if (scene.sensor->medium) return true;
-    for (const auto& shape : scene.shapes)
-        if (shape->interior || shape->exterior) return true;
-    return false;
-}
-
-} // namespace
 
 // Pixels are split into a fixed number of chunks, each with its own light-tracing film, summed in chunk
 // order: the image is bit-identical for a given seed whatever the thread count.

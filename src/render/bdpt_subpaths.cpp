@@ -2,6 +2,7 @@
 
 #include "core/warp.h"
 #include "render/adjoint_shading.h"
+#include "render/light_medium.h"
 #include "render/medium_sampling.h"
 #include "render/volume_visibility.h"
 
@@ -43,23 +44,6 @@ std::pair<float, float> segment_free_flight(const std::vector<Piece>& pieces, bo
 bool crosses(const SurfaceInteraction3f& hit) {
     const BSDF* bsdf = hit.bsdf();
     return bsdf && bsdf->flags() == BSDFNull;
-}
-
-// The medium at the start of `ray`: the near side of the first surface along it that declares media. A ray
-// that meets none starts in vacuum, unless no shape declares media: the sensor's medium then fills space.
-const Medium* locate_medium(BDPTContext& ctx, Ray ray) {
-    if (!ctx.has_media) return nullptr;
-    for (int crossing = 0; crossing < 64; ++crossing) {
-        ++ctx.rays.rays;
-        const SurfaceInteraction3f hit = ctx.scene.intersect(ray);
-        if (!hit.is_valid()) break;
-        if (hit.shape->interior || hit.shape->exterior)
-            return target_medium(*hit.shape, hit.n, -ray.d, static_cast<const Medium*>(nullptr));
-        ray = hit.spawn_ray(ray.d);
-    }
-    for (const auto& shape : ctx.scene.shapes)
-        if (shape->interior || shape->exterior) return nullptr;
-    return sensor_medium(ctx.scene);
 }
 
 // Extends `path` from its last vertex along `ray` (sampled with solid-angle density pdf_dir, or the disk
@@ -342,9 +326,7 @@ void light_subpath(BDPTContext& ctx, std::vector<PathVertex>& path, size_t max_v
         if (!(pdf_dir > 0.f)) return;
         beta = emitter->eval(si) * (Pi / light.pdf_fwd);
         ray = si.spawn_ray(d);
-        medium = (shape->interior || shape->exterior)
-                     ? target_medium(*shape, ps.n, d, static_cast<const Medium*>(nullptr))
-                     : locate_medium(ctx, ray);
+        medium = ctx.has_media ? emitter_medium(ctx.scene, *emitter, ray.o, ctx.rays) : nullptr;
     } else if (emitter->flags() & EmitterDeltaPosition) {
         // Point, spot, projector: the emitter's own ray sampling, whose direction density it reports.
         Color3f weight;
@@ -354,7 +336,7 @@ void light_subpath(BDPTContext& ctx, std::vector<PathVertex>& path, size_t max_v
         light.beta = Color3f(1.f / selection);
         pdf_dir = emitter->pdf_emission_direction(ray.d);
         beta = weight / selection;
-        medium = locate_medium(ctx, ray);
+        medium = ctx.has_media ? emitter_medium(ctx.scene, *emitter, ray.o, ctx.rays) : nullptr;
     } else {
         // Infinite lights (pbrt, Mitsuba): the emitter's direction sampling, then an origin uniform on the
         // disk of the scene's bounding sphere perpendicular to it, upstream of the scene.
@@ -374,7 +356,7 @@ void light_subpath(BDPTContext& ctx, std::vector<PathVertex>& path, size_t max_v
         light.beta = Color3f(1.f / selection);
         pdf_dir = 1.f / (Pi * r * r);
         beta = weight * (Pi * r * r / selection);
-        medium = locate_medium(ctx, ray);
+        medium = ctx.has_media ? emitter_medium(ctx.scene, *emitter, ray.o, ctx.rays) : nullptr;
     }
     light.medium = medium;
     path.push_back(light);

@@ -8,6 +8,8 @@ bool scene_has_media(const Scene& scene) {
     if (sensor_medium(scene)) return true;
     for (const auto& shape : scene.shapes)
         if (shape->interior || shape->exterior) return true;
+    for (const auto& emitter : scene.emitters)
+        if (emitter->medium) return true;
     return false;
 }
 

@@ -1,4 +1,4 @@
-// The medium a light path starts in (light tracing and bidirectional estimators).
+// The medium a light path starts in: one rule for light tracing (ptracer) and bidirectional estimators (bdpt).
 //
 // Rule: an emitter that nests a medium (Mitsuba's `medium` child of emitters) sits in it. Otherwise an area
 // emitter on a shape that declares media emits into the medium on its emitting side, the side its normal points
@@ -13,7 +13,7 @@
 
 namespace penumbra {
 
-// Whether the sensor or any shape declares a medium (otherwise every path travels in vacuum).
+// Whether the sensor, a shape or an emitter declares a medium (otherwise every path travels in vacuum).
 bool scene_has_media(const Scene& scene);
 
 // The medium at world point x by the walk from the sensor described above. Counts its rays.
