@@ -3,8 +3,9 @@
 
 #include "render/film_output.h"
 #include "render/integrator.h"
-#include "scene/medium.h"
+#include "render/light_medium.h"
 #include "render/render.h"
+#include "scene/medium.h"
 #include "scene/scene.h"
 
 #include <cstdio>
@@ -24,6 +25,14 @@ int cmd_render(const std::string& scene_path, const std::string& output, int spp
         auto obj = make_integrator(Properties(integrator, SourceLocation{"--integrator", 0}), LoadContext{});
         scene->integrator = std::static_pointer_cast<Integrator>(obj);
     }
+    // As in Mitsuba, surface integrators render a scene with media as if it had none: say so.
+    const std::string& used = scene->integrator->plugin;
+    if (scene_has_media(*scene) && used != "volpath" && used != "volpathmis" && used != "bdpt" && used != "ptracer" &&
+        used != "moment")
+        std::fprintf(stderr,
+                     "warning: integrator '%s' ignores the scene's participating media (volpath, volpathmis and "
+                     "bdpt render them)\n",
+                     used.c_str());
     RenderOptions options;
     options.spp = spp;
     options.seed = seed;

@@ -155,3 +155,35 @@ TEST(Method, PathsAdapterIsTheEstimator) {
     params.enable({{"box.translate", {1, 0, 0}}});
     EXPECT_THROW(make_method("paths", MethodOptions())->gradient(*scene, params, adjoint, run), Error);
 }
+
+// Media are rendered (volpath, volpathmis, bdpt) but not yet differentiated: every method refuses a scene with
+// media, forward and reverse, with one line that says so, rather than differentiating it as if it had none.
+TEST(Method, EveryMethodRefusesScenesWithMedia) {
+    auto scene = load_scene_string(R"(<scene version="3.0.0">
+      <medium type="homogeneous" id="fog"><float name="sigma_t" value="0.5"/></medium>
+      <sensor type="perspective"><ref name="medium" id="fog"/>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+      <shape type="rectangle" id="plane"><bsdf type="diffuse" id="white"/></shape>
+      <emitter type="constant"/>
+    </scene>)");
+    Parameters params(*scene);
+    params.enable({{"white.reflectance", {1, 1, 1}}});
+    MethodRun run;
+    run.spp = 4;
+    run.batches = 2;
+    const Image adjoint(8, 8, Color3f(1.f));
+    for (const MethodInfo& info : derivative_methods()) {
+        for (int reverse = 0; reverse < 2; ++reverse) {
+            std::string message;
+            try {
+                auto method = make_method(info.name, MethodOptions());
+                if (reverse) method->gradient(*scene, params, adjoint, run);
+                else method->derivative(*scene, params, run);
+            } catch (const Error& e) {
+                message = e.what();
+            }
+            EXPECT_NE(message.find("participating media"), std::string::npos)
+                << info.name << (reverse ? " gradient" : " derivative") << ": '" << message << "'";
+        }
+    }
+}

@@ -4,6 +4,7 @@
 #include "core/interrupt.h"
 #include "core/stratified.h"
 #include "diff/material_form.h"
+#include "render/light_medium.h"
 #include "render/path.h"
 #include "render/tiles.h"
 
@@ -143,9 +144,16 @@ PixelSums forward_batch(const Scene& scene, const Parameters& params, const Diff
 void check_ready(const Scene& scene, const Parameters& params) {
     if (params.dimension() == 0) throw Error("no parameter is enabled for differentiation");
     if (!scene.sensor || !scene.sensor->film) throw Error("the scene has no sensor");
+    require_no_media(scene);
 }
 
 } // namespace
+
+void require_no_media(const Scene& scene) {
+    if (scene_has_media(scene))
+        throw Error("the scene has participating media, which the derivative methods do not differentiate yet: "
+                    "render it with volpath, volpathmis or bdpt");
+}
 
 DerivativeImage render_derivative(const Scene& scene, const Parameters& params, const DiffOptions& options) {
     check_ready(scene, params);

@@ -43,6 +43,8 @@ struct Gradient {
 // Path settings from the scene's `path` integrator (defaults otherwise).
 PathSettings path_settings(const Scene& scene);
 
+// Throws a clear Error for scenes with participating media (the differentiable estimators trace surfaces only).
+void require_no_media(const Scene& scene);
 DerivativeImage render_derivative(const Scene& scene, const Parameters& params, const DiffOptions& options);
 // `adjoint` has the film's size: ∂L/∂I per pixel and channel.
 Gradient render_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const DiffOptions& options);

@@ -148,6 +148,7 @@ void batch_statistics(const std::vector<std::vector<double>>& batches, std::vect
 void check_path_sampling(const Scene& scene, const Parameters& params, const PathSamplingOptions& o) {
     if (params.dimension() == 0) throw Error("no parameter is enabled for differentiation");
     if (!scene.sensor || !scene.sensor->film) throw Error("the scene has no sensor");
+    require_no_media(scene);
     for (const auto& [p, index] : params.enabled())
         if (p->kind != Parameter::Kind::Data || p->geometry)
             throw Error("path sampling (paper 002) differentiates only parameters that do not move geometry; '" + p->name +
