@@ -47,40 +47,34 @@ HeroFreeFlight sample_free_flight_hero(const Medium& medium, const Vec3f& o, con
                                        Sampler& sampler) {
     if (medium.is_homogeneous()) return sample_homogeneous(medium, o, d, tmax, hero, sampler);
     HeroFreeFlight s;
-    medium.majorants(o, d, 0.f, tmax, [&](float t0, float t1, float m) {
-        if (!(m > 0.f)) return true; // nothing to collide with on this segment
-        float t = t0;
-        for (;;) {
-            t -= std::log1p(-sampler.next_1d()) / m;
-            if (t >= t1) return true; // memoryless: continue on the next segment from its start
-            const Vec3f p = o + d * t;
-            const Color3f sigma_t = medium.sigma_t(p);
-            const Color3f sigma_s = sigma_t * medium.albedo(p);
-            const Color3f sigma_a = sigma_t - sigma_s;
-            const Color3f sigma_n(std::max(m - sigma_t.x, 0.f), std::max(m - sigma_t.y, 0.f),
-                                  std::max(m - sigma_t.z, 0.f));
-            const float u = sampler.next_1d() * m;
-            if (u < sigma_a[hero]) {
-                s.event = FreeFlightSample::Event::Absorbed;
-                s.weight = Color3f(0.f);
-                return false;
-            }
-            if (u < sigma_a[hero] + sigma_s[hero]) {
-                s.event = FreeFlightSample::Event::Scattered;
-                s.t = t;
-                s.p = p;
-                s.weight *= sigma_s / sigma_s[hero];
-                s.ratio *= sigma_s / sigma_s[hero];
-                return false;
-            }
-            if (!(sigma_n[hero] > 0.f)) { // rounding put u past sigma_t,c = m: treat as absorbed
-                s.event = FreeFlightSample::Event::Absorbed;
-                s.weight = Color3f(0.f);
-                return false;
-            }
-            s.weight *= sigma_n / sigma_n[hero];
-            s.ratio *= sigma_n / sigma_n[hero];
+    for_each_tentative_collision(medium, o, d, tmax, sampler, [&](float t, const Vec3f& p, float m) {
+        const Color3f sigma_t = medium.sigma_t(p);
+        const Color3f sigma_s = sigma_t * medium.albedo(p);
+        const Color3f sigma_a = sigma_t - sigma_s;
+        const Color3f sigma_n(std::max(m - sigma_t.x, 0.f), std::max(m - sigma_t.y, 0.f),
+                              std::max(m - sigma_t.z, 0.f));
+        const float u = sampler.next_1d() * m;
+        if (u < sigma_a[hero]) {
+            s.event = FreeFlightSample::Event::Absorbed;
+            s.weight = Color3f(0.f);
+            return false;
         }
+        if (u < sigma_a[hero] + sigma_s[hero]) {
+            s.event = FreeFlightSample::Event::Scattered;
+            s.t = t;
+            s.p = p;
+            s.weight *= sigma_s / sigma_s[hero];
+            s.ratio *= sigma_s / sigma_s[hero];
+            return false;
+        }
+        if (!(sigma_n[hero] > 0.f)) { // rounding put u past sigma_t,c = m: treat as absorbed
+            s.event = FreeFlightSample::Event::Absorbed;
+            s.weight = Color3f(0.f);
+            return false;
+        }
+        s.weight *= sigma_n / sigma_n[hero];
+        s.ratio *= sigma_n / sigma_n[hero];
+        return true;
     });
     return s;
 }

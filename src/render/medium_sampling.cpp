@@ -53,36 +53,30 @@ FreeFlightSample sample_free_flight(const Medium& medium, const Vec3f& o, const 
     FreeFlightSample s;
     Color3f weight(1.f);
     bool done = false;
-    medium.majorants(o, d, 0.f, tmax, [&](float t0, float t1, float m) {
-        if (!(m > 0.f)) return true; // nothing to collide with on this segment
-        float t = t0;
-        for (;;) {
-            t -= std::log1p(-sampler.next_1d()) / m;
-            if (t >= t1) return true; // memoryless: continue on the next segment from its start
-            const Vec3f p = o + d * t;
-            const Color3f sigma_t = medium.sigma_t(p);
-            const Color3f sigma_s = sigma_t * medium.albedo(p);
-            const Color3f sigma_a = sigma_t - sigma_s;
-            const Color3f sigma_n = Color3f(m) - sigma_t;
-            const float pa = std::max(mean(sigma_a), 0.f), ps = std::max(mean(sigma_s), 0.f),
-                        pn = std::max(mean(sigma_n), 0.f);
-            const float total = pa + ps + pn;
-            const float u = sampler.next_1d() * total;
-            if (u < pa) {
-                s.event = FreeFlightSample::Event::Absorbed;
-                done = true;
-                return false;
-            }
-            if (u < pa + ps || !(pn > 0.f)) { // (the second test guards the rounding of u up to total)
-                s.event = FreeFlightSample::Event::Scattered;
-                s.t = t;
-                s.p = p;
-                s.weight = weight * sigma_s * (total / (m * ps));
-                done = true;
-                return false;
-            }
-            weight *= sigma_n * (total / (m * pn));
+    for_each_tentative_collision(medium, o, d, tmax, sampler, [&](float t, const Vec3f& p, float m) {
+        const Color3f sigma_t = medium.sigma_t(p);
+        const Color3f sigma_s = sigma_t * medium.albedo(p);
+        const Color3f sigma_a = sigma_t - sigma_s;
+        const Color3f sigma_n = Color3f(m) - sigma_t;
+        const float pa = std::max(mean(sigma_a), 0.f), ps = std::max(mean(sigma_s), 0.f),
+                    pn = std::max(mean(sigma_n), 0.f);
+        const float total = pa + ps + pn;
+        const float u = sampler.next_1d() * total;
+        if (u < pa) {
+            s.event = FreeFlightSample::Event::Absorbed;
+            done = true;
+            return false;
         }
+        if (u < pa + ps || !(pn > 0.f)) { // (the second test guards the rounding of u up to total)
+            s.event = FreeFlightSample::Event::Scattered;
+            s.t = t;
+            s.p = p;
+            s.weight = weight * sigma_s * (total / (m * ps));
+            done = true;
+            return false;
+        }
+        weight *= sigma_n * (total / (m * pn));
+        return true;
     });
     if (!done) {
         s.event = FreeFlightSample::Event::Passed;
@@ -102,22 +96,17 @@ Color3f transmittance(const Medium& medium, const Vec3f& o, const Vec3f& d, floa
         return exp_neg(sigma_t * tmax);
     }
     Color3f tr(1.f);
-    medium.majorants(o, d, 0.f, tmax, [&](float t0, float t1, float m) {
-        if (!(m > 0.f)) return true;
-        float t = t0;
-        for (;;) {
-            t -= std::log1p(-sampler.next_1d()) / m;
-            if (t >= t1) return true;
-            tr *= Color3f(1.f) - medium.sigma_t(o + d * t) / m;
-            const float q = max_component(tr);
-            if (q < 0.1f) {
-                if (!(q > 0.f) || sampler.next_1d() >= q) {
-                    tr = Color3f(0.f);
-                    return false;
-                }
-                tr /= q;
+    for_each_tentative_collision(medium, o, d, tmax, sampler, [&](float, const Vec3f& p, float m) {
+        tr *= Color3f(1.f) - medium.sigma_t(p) / m;
+        const float q = max_component(tr);
+        if (q < 0.1f) {
+            if (!(q > 0.f) || sampler.next_1d() >= q) {
+                tr = Color3f(0.f);
+                return false;
             }
+            tr /= q;
         }
+        return true;
     });
     return tr;
 }

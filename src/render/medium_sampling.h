@@ -12,6 +12,8 @@
 #include "core/sampler.h"
 #include "scene/medium.h"
 
+#include <cmath>
+
 namespace penumbra {
 
 struct FreeFlightSample {
@@ -27,6 +29,22 @@ struct FreeFlightSample {
     // heterogeneous media these are left at 0 (use free_flight_pdf for MIS).
     Color3f pdf{0.f, 0.f, 0.f};
 };
+
+// The tentative collisions of delta and ratio tracking along o + t d, t in [0, tmax): exponential steps with
+// the medium's majorant m on each of its majorant segments (memoryless: a step past a segment's end restarts
+// at the next segment's start). Calls f(t, p, m) at each; stops when f returns false.
+template <typename F>
+void for_each_tentative_collision(const Medium& medium, const Vec3f& o, const Vec3f& d, float tmax,
+                                  Sampler& sampler, F&& f) {
+    medium.majorants(o, d, 0.f, tmax, [&](float t0, float t1, float m) {
+        if (!(m > 0.f)) return true; // nothing to collide with on this segment
+        for (float t = t0;;) {
+            t -= std::log1p(-sampler.next_1d()) / m;
+            if (t >= t1) return true;
+            if (!f(t, o + d * t, m)) return false;
+        }
+    });
+}
 
 // Samples where a ray (origin o, unit direction d) travelling in `medium` first scatters within [0, tmax).
 FreeFlightSample sample_free_flight(const Medium& medium, const Vec3f& o, const Vec3f& d, float tmax,
