@@ -23,6 +23,7 @@ int cmd_render(const std::string& scene_path, const std::string& output, int spp
     scene->select_sensor(sensor);
     if (!integrator.empty()) {
         auto obj = make_integrator(Properties(integrator, SourceLocation{"--integrator", 0}), LoadContext{});
+        obj->plugin = integrator;
         scene->integrator = std::static_pointer_cast<Integrator>(obj);
     }
     // As in Mitsuba, surface integrators render a scene with media as if it had none: say so.

@@ -152,3 +152,32 @@ TEST(CLI, SensorOptionPicksASensor) {
         << r.output;
     fs::remove_all(dir);
 }
+
+// The bundled media scene: info lists the medium and who uses it; each media integrator renders it; a surface
+// integrator renders it with a warning that it ignores the media; derivatives refuse it in one line.
+TEST(CLI, BundledMediaScene) {
+    const std::string hazy = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/media/hazy_room.xml";
+    const std::string small = " -D width=16 -D height=12 --spp 2 --quiet";
+    const Result info = run("info " + hazy);
+    EXPECT_EQ(info.status, 0) << info.output;
+    EXPECT_NE(info.output.find("media: 1"), std::string::npos) << info.output;
+    EXPECT_NE(info.output.find("sensor camera, room (interior)"), std::string::npos) << info.output;
+    const fs::path dir = temp_dir();
+    for (const char* integrator : {"bdpt", "volpath", "volpathmis"}) {
+        const fs::path out = dir / (std::string(integrator) + ".exr");
+        const Result r = run("render " + hazy + " --integrator " + integrator + " -o " + out.string() + small);
+        EXPECT_EQ(r.status, 0) << r.output;
+        EXPECT_TRUE(fs::exists(out)) << integrator;
+        EXPECT_EQ(r.output.find("warning"), std::string::npos) << integrator << ": " << r.output;
+    }
+    const Result path = run("render " + hazy + " --integrator path -o " + (dir / "path.exr").string() + small);
+    EXPECT_EQ(path.status, 0) << path.output;
+    EXPECT_NE(path.output.find("warning: integrator 'path' ignores the scene's participating media"),
+              std::string::npos)
+        << path.output;
+    const fs::path d = dir / "d.exr";
+    const Result deriv = run("derivative " + hazy + " --param glass.translate=1,0,0 -o " + d.string() + small);
+    EXPECT_EQ(deriv.status, 1) << deriv.output;
+    EXPECT_NE(deriv.output.find("participating media"), std::string::npos) << deriv.output;
+    EXPECT_FALSE(fs::exists(d));
+}
