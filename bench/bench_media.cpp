@@ -2,8 +2,9 @@
 //  - time per camera sample of `volpath`, `volpathmis` and `bdpt` relative to `path` on the same room without
 //    media, and of the same integrators with the room filled with haze;
 //  - variance x time of `bdpt` relative to `path` on a caustic scene (a glass sphere focusing a small area light
-//    onto a diffuse floor): the mean per-pixel variance over independent renders times the seconds per render,
-//    at equal samples per pixel (a ratio below 1 means bdpt reaches a given noise level sooner).
+//    onto a diffuse floor) and on a room lit through a small opening: the mean per-pixel variance over
+//    independent renders times the seconds per render, at equal samples per pixel (a ratio below 1 means bdpt
+//    reaches a given noise level sooner).
 //
 // Usage: build/penumbra_bench_media [--runs N] [--spp N] [--res N]   (defaults 16, 32, 96)
 #include "render/render.h"
@@ -66,6 +67,37 @@ std::string caustic_scene(const std::string& integrator, int res) {
 </scene>)";
 }
 
+// A closed diffuse room lit only through a small opening in its right wall, by an area light outside that faces
+// away from the room toward a diffuse reflector (Veach's "door ajar"): next-event estimation from inside never
+// reaches the light, a camera path must leave through the opening and hit the reflector first, while light
+// subpaths reflected through the opening connect to every camera vertex.
+std::string opening_scene(const std::string& integrator, int res) {
+    auto wall = [](const std::string& transform) {
+        return R"(<shape type="rectangle"><transform name="to_world">)" + transform +
+               R"(</transform><bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.7"/></bsdf></bsdf></shape>)";
+    };
+    // The right wall (x = 1) as four panels around a 0.3 x 0.3 opening at its centre.
+    auto panel = [&](float y, float z, float sy, float sz) {
+        return wall(R"(<scale x=")" + std::to_string(sz) + R"(" y=")" + std::to_string(sy) +
+                    R"("/><rotate y="1" angle="-90"/><translate x="1" y=")" + std::to_string(y) + R"(" z=")" +
+                    std::to_string(z) + R"("/>)");
+    };
+    return R"(<scene version="3.0.0">
+  <integrator type=")" + integrator + R"("><integer name="max_depth" value="8"/></integrator>
+  <sensor type="perspective"><float name="fov" value="70"/>
+    <transform name="to_world"><lookat origin="0, 0, 0.9" target="0, 0, -1" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value=")" + std::to_string(res) + R"("/>
+      <integer name="height" value=")" + std::to_string(res) + R"("/></film></sensor>)" +
+           wall(R"(<rotate x="1" angle="-90"/><translate y="-1"/>)") + wall(R"(<rotate x="1" angle="90"/><translate y="1"/>)") +
+           wall(R"(<translate z="-1"/>)") + wall(R"(<rotate y="1" angle="180"/><translate z="1"/>)") +
+           wall(R"(<rotate y="1" angle="90"/><translate x="-1"/>)") + panel(0.575f, 0.f, 0.425f, 1.f) +
+           panel(-0.575f, 0.f, 0.425f, 1.f) + panel(0.f, 0.575f, 0.15f, 0.425f) + panel(0.f, -0.575f, 0.15f, 0.425f) +
+           wall(R"(<scale value="1.5"/><rotate y="1" angle="-90"/><translate x="2"/>)") + R"(
+  <shape type="rectangle"><transform name="to_world"><scale value="0.3"/><rotate y="1" angle="90"/>
+    <translate x="1.4"/></transform><emitter type="area"><rgb name="radiance" value="100"/></emitter></shape>
+</scene>)";
+}
+
 struct Timing {
     double seconds_per_sample = 0;
     Image image;
@@ -124,11 +156,17 @@ int main(int argc, char** argv) {
             std::printf("  %-10s / path, time per sample: without media %.2f, with haze %.2f\n", integrator,
                         time_render(room_scene(integrator, false, res), spp, 1).seconds_per_sample / path,
                         time_render(room_scene(integrator, true, res), spp, 1).seconds_per_sample / path);
-        const auto [var_path, t_path] = variance_and_time(caustic_scene("path", res), spp, runs);
-        const auto [var_bdpt, t_bdpt] = variance_and_time(caustic_scene("bdpt", res), spp, runs);
-        std::printf("caustic scene, %d runs: path variance %.4g in %.2f s, bdpt variance %.4g in %.2f s\n", runs,
-                    var_path, t_path, var_bdpt, t_bdpt);
-        std::printf("bdpt variance x time / path variance x time = %.3f\n", var_bdpt * t_bdpt / (var_path * t_path));
+        using SceneMaker = std::string (*)(const std::string&, int);
+        const std::pair<const char*, SceneMaker> efficiency_scenes[] = {{"caustic", caustic_scene},
+                                                                         {"small opening", opening_scene}};
+        for (const auto& [name, make] : efficiency_scenes) {
+            const auto [var_path, t_path] = variance_and_time(make("path", res), spp, runs);
+            const auto [var_bdpt, t_bdpt] = variance_and_time(make("bdpt", res), spp, runs);
+            std::printf("%s scene, %d runs: path variance %.4g in %.2f s, bdpt variance %.4g in %.2f s\n", name,
+                        runs, var_path, t_path, var_bdpt, t_bdpt);
+            std::printf("  bdpt variance x time / path variance x time = %.3f\n",
+                        var_bdpt * t_bdpt / (var_path * t_path));
+        }
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return 1;
