@@ -1,7 +1,8 @@
 // Participating media and bidirectional path tracing (issue 12), measured in one run:
 //  - time per camera sample of `volpath`, `volpathmis` and `bdpt` relative to `path` on the same room without
 //    media, and of the same integrators with the room filled with haze;
-//  - variance x time of `bdpt` relative to `path` on a caustic scene (a glass sphere focusing a small area light
+//  - variance x time of `bdpt` relative to `path` on a caustic scene (a glass sphere focusing a small area
+//  light
 //    onto a diffuse floor) and on a room lit through a small opening: the mean per-pixel variance over
 //    independent renders times the seconds per render, at equal samples per pixel (a ratio below 1 means bdpt
 //    reaches a given noise level sooner).
@@ -27,24 +28,30 @@ std::string room_scene(const std::string& integrator, bool haze, int res) {
     const std::string medium_ref = haze ? R"(<ref name="interior" id="haze"/>)" : "";
     const std::string exterior_ref = haze ? R"(<ref name="exterior" id="haze"/>)" : "";
     return R"(<scene version="3.0.0">
-  <integrator type=")" + integrator + R"("><integer name="max_depth" value="8"/></integrator>
+  <integrator type=")" +
+           integrator + R"("><integer name="max_depth" value="8"/></integrator>
   <medium type="homogeneous" id="haze"><float name="sigma_t" value="0.3"/><rgb name="albedo" value="0.8"/>
     <phase type="hg"><float name="g" value="0.4"/></phase></medium>
   <sensor type="perspective"><float name="fov" value="60"/>
     <transform name="to_world"><lookat origin="0, 0, 1.8" target="0, -0.2, 0" up="0, 1, 0"/></transform>)" +
            (haze ? R"(<ref name="medium" id="haze"/>)" : "") + R"(
-    <film type="hdrfilm"><integer name="width" value=")" + std::to_string(res) + R"("/>
-      <integer name="height" value=")" + std::to_string(res) + R"("/></film></sensor>
+    <film type="hdrfilm"><integer name="width" value=")" +
+           std::to_string(res) + R"("/>
+      <integer name="height" value=")" +
+           std::to_string(res) + R"("/></film></sensor>
   <shape type="cube"><transform name="to_world"><scale value="2"/></transform>
     <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.6"/></bsdf></bsdf>)" +
            medium_ref + R"(</shape>
   <shape type="cube"><transform name="to_world"><scale value="0.4"/><translate value="-0.6, -1.6, -0.5"/></transform>
-    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.2, 0.1"/></bsdf>)" + exterior_ref + R"(</shape>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.2, 0.1"/></bsdf>)" +
+           exterior_ref + R"(</shape>
   <shape type="sphere"><point name="center" value="0.6, -1.5, 0"/><float name="radius" value="0.5"/>
-    <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.4, 0.6"/></bsdf>)" + exterior_ref + R"(</shape>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.4, 0.6"/></bsdf>)" +
+           exterior_ref + R"(</shape>
   <shape type="rectangle"><transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/>
     <translate value="0, 1.99, 0"/></transform><bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
-    <emitter type="area"><rgb name="radiance" value="10"/></emitter>)" + exterior_ref + medium_ref + R"(</shape>
+    <emitter type="area"><rgb name="radiance" value="10"/></emitter>)" +
+           exterior_ref + medium_ref + R"(</shape>
 </scene>)";
 }
 
@@ -53,11 +60,14 @@ std::string room_scene(const std::string& integrator, bool haze, int res) {
 // the small light, and by bdpt through light tracing and connections of light subpaths.
 std::string caustic_scene(const std::string& integrator, int res) {
     return R"(<scene version="3.0.0">
-  <integrator type=")" + integrator + R"("><integer name="max_depth" value="8"/></integrator>
+  <integrator type=")" +
+           integrator + R"("><integer name="max_depth" value="8"/></integrator>
   <sensor type="perspective"><float name="fov" value="35"/>
     <transform name="to_world"><lookat origin="0, 2.2, -2.2" target="0, 0.2, 0" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value=")" + std::to_string(res) + R"("/>
-      <integer name="height" value=")" + std::to_string(res) + R"("/></film></sensor>
+    <film type="hdrfilm"><integer name="width" value=")" +
+           std::to_string(res) + R"("/>
+      <integer name="height" value=")" +
+           std::to_string(res) + R"("/></film></sensor>
   <shape type="rectangle"><transform name="to_world"><scale value="2"/><rotate x="1" angle="-90"/></transform>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.8"/></bsdf></shape>
   <shape type="sphere"><point name="center" value="0, 0.6, 0"/><float name="radius" value="0.4"/>
@@ -67,10 +77,10 @@ std::string caustic_scene(const std::string& integrator, int res) {
 </scene>)";
 }
 
-// A closed diffuse room lit only through a small opening in its right wall, by an area light outside that faces
-// away from the room toward a diffuse reflector (Veach's "door ajar"): next-event estimation from inside never
-// reaches the light, a camera path must leave through the opening and hit the reflector first, while light
-// subpaths reflected through the opening connect to every camera vertex.
+// A closed diffuse room lit only through a small opening in its right wall, by an area light outside that
+// faces away from the room toward a diffuse reflector (Veach's "door ajar"): next-event estimation from
+// inside never reaches the light, a camera path must leave through the opening and hit the reflector first,
+// while light subpaths reflected through the opening connect to every camera vertex.
 std::string opening_scene(const std::string& integrator, int res) {
     auto wall = [](const std::string& transform) {
         return R"(<shape type="rectangle"><transform name="to_world">)" + transform +
@@ -83,15 +93,20 @@ std::string opening_scene(const std::string& integrator, int res) {
                     std::to_string(z) + R"("/>)");
     };
     return R"(<scene version="3.0.0">
-  <integrator type=")" + integrator + R"("><integer name="max_depth" value="8"/></integrator>
+  <integrator type=")" +
+           integrator + R"("><integer name="max_depth" value="8"/></integrator>
   <sensor type="perspective"><float name="fov" value="70"/>
     <transform name="to_world"><lookat origin="0, 0, 0.9" target="0, 0, -1" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value=")" + std::to_string(res) + R"("/>
-      <integer name="height" value=")" + std::to_string(res) + R"("/></film></sensor>)" +
-           wall(R"(<rotate x="1" angle="-90"/><translate y="-1"/>)") + wall(R"(<rotate x="1" angle="90"/><translate y="1"/>)") +
-           wall(R"(<translate z="-1"/>)") + wall(R"(<rotate y="1" angle="180"/><translate z="1"/>)") +
+    <film type="hdrfilm"><integer name="width" value=")" +
+           std::to_string(res) + R"("/>
+      <integer name="height" value=")" +
+           std::to_string(res) + R"("/></film></sensor>)" +
+           wall(R"(<rotate x="1" angle="-90"/><translate y="-1"/>)") +
+           wall(R"(<rotate x="1" angle="90"/><translate y="1"/>)") + wall(R"(<translate z="-1"/>)") +
+           wall(R"(<rotate y="1" angle="180"/><translate z="1"/>)") +
            wall(R"(<rotate y="1" angle="90"/><translate x="-1"/>)") + panel(0.575f, 0.f, 0.425f, 1.f) +
-           panel(-0.575f, 0.f, 0.425f, 1.f) + panel(0.f, 0.575f, 0.15f, 0.425f) + panel(0.f, -0.575f, 0.15f, 0.425f) +
+           panel(-0.575f, 0.f, 0.425f, 1.f) + panel(0.f, 0.575f, 0.15f, 0.425f) +
+           panel(0.f, -0.575f, 0.15f, 0.425f) +
            wall(R"(<scale value="1.5"/><rotate y="1" angle="-90"/><translate x="2"/>)") + R"(
   <shape type="rectangle"><transform name="to_world"><scale value="0.3"/><rotate y="1" angle="90"/>
     <translate x="1.4"/></transform><emitter type="area"><rgb name="radiance" value="100"/></emitter></shape>
@@ -131,9 +146,11 @@ std::pair<double, double> variance_and_time(const std::string& xml, int spp, int
     for (size_t i = 0; i < n; ++i)
         for (int c = 0; c < 3; ++c) {
             double mean = 0, sq = 0;
-            for (const Image& im : images) mean += im.pixels[i][c];
+            for (const Image& im : images)
+                mean += im.pixels[i][c];
             mean /= runs;
-            for (const Image& im : images) sq += (im.pixels[i][c] - mean) * (im.pixels[i][c] - mean);
+            for (const Image& im : images)
+                sq += (im.pixels[i][c] - mean) * (im.pixels[i][c] - mean);
             variance += sq / (runs - 1);
         }
     return {variance / (3.0 * n), seconds / runs};
@@ -144,9 +161,12 @@ std::pair<double, double> variance_and_time(const std::string& xml, int spp, int
 int main(int argc, char** argv) {
     int runs = 16, spp = 32, res = 96;
     for (int i = 1; i + 1 < argc; i += 2) {
-        if (!std::strcmp(argv[i], "--runs")) runs = std::atoi(argv[i + 1]);
-        else if (!std::strcmp(argv[i], "--spp")) spp = std::atoi(argv[i + 1]);
-        else if (!std::strcmp(argv[i], "--res")) res = std::atoi(argv[i + 1]);
+        if (!std::strcmp(argv[i], "--runs"))
+            runs = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--spp"))
+            spp = std::atoi(argv[i + 1]);
+        else if (!std::strcmp(argv[i], "--res"))
+            res = std::atoi(argv[i + 1]);
     }
     try {
         std::printf("%d threads, %dx%d, %d spp\n", tbb::this_task_arena::max_concurrency(), res, res, spp);
@@ -158,12 +178,12 @@ int main(int argc, char** argv) {
                         time_render(room_scene(integrator, true, res), spp, 1).seconds_per_sample / path);
         using SceneMaker = std::string (*)(const std::string&, int);
         const std::pair<const char*, SceneMaker> efficiency_scenes[] = {{"caustic", caustic_scene},
-                                                                         {"small opening", opening_scene}};
+                                                                        {"small opening", opening_scene}};
         for (const auto& [name, make] : efficiency_scenes) {
             const auto [var_path, t_path] = variance_and_time(make("path", res), spp, runs);
             const auto [var_bdpt, t_bdpt] = variance_and_time(make("bdpt", res), spp, runs);
-            std::printf("%s scene, %d runs: path variance %.4g in %.2f s, bdpt variance %.4g in %.2f s\n", name,
-                        runs, var_path, t_path, var_bdpt, t_bdpt);
+            std::printf("%s scene, %d runs: path variance %.4g in %.2f s, bdpt variance %.4g in %.2f s\n",
+                        name, runs, var_path, t_path, var_bdpt, t_bdpt);
             std::printf("  bdpt variance x time / path variance x time = %.3f\n",
                         var_bdpt * t_bdpt / (var_path * t_path));
         }

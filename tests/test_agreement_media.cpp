@@ -28,7 +28,8 @@ constexpr int kRes = 24, kBatches = 16;
 Image block_average(const Image& im) {
     Image b(im.width / 4, im.height / 4);
     for (int y = 0; y < b.height * 4; ++y)
-        for (int x = 0; x < b.width * 4; ++x) b.at(x / 4, y / 4) += im.at(x, y) / 16.f;
+        for (int x = 0; x < b.width * 4; ++x)
+            b.at(x / 4, y / 4) += im.at(x, y) / 16.f;
     return b;
 }
 
@@ -50,12 +51,14 @@ Estimate estimate(const std::string& xml, const std::string& integrator, int spp
         const Image im = render(*scene, opt);
         blocks.add(block_average(im));
         double m = 0;
-        for (const auto& p : im.pixels) m += p.x + p.y + p.z;
+        for (const auto& p : im.pixels)
+            m += p.x + p.y + p.z;
         means.push_back(m / (3.0 * im.pixels.size()));
     }
     Estimate e{blocks.mean(), blocks.standard_error()};
     double m = 0, m2 = 0;
-    for (double v : means) m += v, m2 += v * v;
+    for (double v : means)
+        m += v, m2 += v * v;
     m /= kBatches;
     e.mean = m;
     e.mean_stderr = std::sqrt(std::max(0.0, (m2 / kBatches - m * m) * kBatches / (kBatches - 1)) / kBatches);
@@ -72,22 +75,26 @@ void expect_agree(const Estimate& a, const Estimate& b, const std::string& what)
         for (int c = 0; c < 3; ++c) {
             const double se = std::hypot(a.block_stderr.pixels[i][c], b.block_stderr.pixels[i][c]);
             const double d = a.block_mean.pixels[i][c] - b.block_mean.pixels[i][c];
-            if (se > 0) worst = std::max(worst, std::abs(d) / se);
-            else EXPECT_EQ(d, 0.0) << what << ": block " << i << " differs without noise";
+            if (se > 0)
+                worst = std::max(worst, std::abs(d) / se);
+            else
+                EXPECT_EQ(d, 0.0) << what << ": block " << i << " differs without noise";
         }
     EXPECT_LT(worst, 5.0) << what << ": largest block |z|";
     std::printf("[ agreement ] %-44s mean z %+.2f, worst block |z| %.2f\n", what.c_str(), z, worst);
 }
 
-std::string camera(const std::string& medium_ref = "", const std::string& lookat =
-                                                          R"(<lookat origin="0, 0.3, 3" target="0, 0, 0" up="0, 1, 0"/>)") {
-    return R"(<sensor type="perspective"><float name="fov" value="45"/><transform name="to_world">)" + lookat +
-           "</transform>" + medium_ref + R"(<film type="hdrfilm"><integer name="width" value=")" +
+std::string
+camera(const std::string& medium_ref = "",
+       const std::string& lookat = R"(<lookat origin="0, 0.3, 3" target="0, 0, 0" up="0, 1, 0"/>)") {
+    return R"(<sensor type="perspective"><float name="fov" value="45"/><transform name="to_world">)" +
+           lookat + "</transform>" + medium_ref + R"(<film type="hdrfilm"><integer name="width" value=")" +
            std::to_string(kRes) + R"("/><integer name="height" value=")" + std::to_string(kRes) +
            R"("/><rfilter type="box"/></film></sensor>)";
 }
 
-const char* kFloor = R"(<shape type="rectangle"><transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/>
+const char* kFloor =
+    R"(<shape type="rectangle"><transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/>
     <translate value="0, -1, 0"/></transform><bsdf type="diffuse"><rgb name="reflectance" value="0.6"/></bsdf></shape>)";
 
 // A cube of chromatic haze behind a null boundary, on a floor, under an area light.
@@ -137,8 +144,10 @@ TEST(MediaAgreement, ChromaticHomogeneousBehindNullBoundary) {
 
 TEST(MediaAgreement, HeterogeneousGridBehindNullBoundary) {
     TempDir dir;
-    const std::string medium = R"(<medium type="heterogeneous" id="fog"><volume name="sigma_t" type="gridvolume">
-        <string name="filename" value=")" + write_vol(dir.str()) + R"("/><transform name="to_world">
+    const std::string medium =
+        R"(<medium type="heterogeneous" id="fog"><volume name="sigma_t" type="gridvolume">
+        <string name="filename" value=")" +
+        write_vol(dir.str()) + R"("/><transform name="to_world">
         <translate value="-0.5, -0.5, -0.5"/><scale value="1.6"/></transform></volume>
         <rgb name="albedo" value="0.8, 0.6, 0.9"/></medium>)";
     const std::string xml = null_box_scene(medium);
@@ -162,10 +171,13 @@ TEST(MediaAgreement, SpotAndPointLightsInHaze) {
         R"(<scene version="3.0.0"><integrator type="$integrator"><integer name="max_depth" value="5"/></integrator>
   <medium type="homogeneous" id="haze"><rgb name="sigma_t" value="0.4"/><rgb name="albedo" value="0.8"/>
     <phase type="hg"><float name="g" value="0.3"/></phase></medium>)" +
-        camera(R"(<ref name="medium" id="haze"/>)", R"(<lookat origin="0, 0, 1.5" target="0, -0.3, 0" up="0, 1, 0"/>)") + R"(
+        camera(R"(<ref name="medium" id="haze"/>)",
+               R"(<lookat origin="0, 0, 1.5" target="0, -0.3, 0" up="0, 1, 0"/>)") +
+        R"(
   <shape type="cube"><transform name="to_world"><scale value="2"/></transform>
     <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></bsdf>
-    <ref name="interior" id="haze"/></shape>)" + bubble("0.5, 1.5, 0") + bubble("-1.2, -1.2, -1.2") + R"(
+    <ref name="interior" id="haze"/></shape>)" +
+        bubble("0.5, 1.5, 0") + bubble("-1.2, -1.2, -1.2") + R"(
   <emitter type="spot"><transform name="to_world"><lookat origin="0.5, 1.5, 0" target="0, -2, 0" up="0, 0, 1"/></transform>
     <rgb name="intensity" value="10"/><float name="cutoff_angle" value="25"/></emitter>
   <emitter type="point"><point name="position" value="-1.2, -1.2, -1.2"/><rgb name="intensity" value="3, 2, 1"/></emitter>
@@ -182,7 +194,8 @@ TEST(MediaAgreement, DielectricSphereFilledWithMediumUnderEnvironment) {
         camera() + R"(
   <medium type="homogeneous" id="milk"><rgb name="sigma_t" value="2, 3, 4"/><rgb name="albedo" value="0.95, 0.9, 0.8"/></medium>
   <shape type="sphere"><float name="radius" value="0.8"/><bsdf type="roughdielectric"><float name="alpha" value="0.2"/></bsdf>
-    <ref name="interior" id="milk"/></shape>)" + kFloor + R"(
+    <ref name="interior" id="milk"/></shape>)" +
+        kFloor + R"(
   <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
 </scene>)";
     const Estimate ref = estimate(xml, "volpath", 32);

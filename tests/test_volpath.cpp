@@ -53,23 +53,26 @@ void expect_constant_image(const Scene& scene, int batches, int spp, const Color
         }
         m /= batches;
         const double se = std::sqrt(std::max(0.0, (m2 / batches - m * m) / (batches - 1)));
-        const double z = se > 0 ? (m - expected[c]) / se : (std::abs(m - expected[c]) < 1e-5 ? 0.0 : INFINITY);
-        EXPECT_LT(std::abs(z), 4.0) << what << " channel " << c << ": mean " << m << " expected " << expected[c];
-        std::printf("[ %s ] channel %d: mean %.5f expected %.5f z = %+.2f, %d/%zu pixel outliers\n", what.c_str(), c,
-                    m, expected[c], z, bad, sum.size());
+        const double z =
+            se > 0 ? (m - expected[c]) / se : (std::abs(m - expected[c]) < 1e-5 ? 0.0 : INFINITY);
+        EXPECT_LT(std::abs(z), 4.0) << what << " channel " << c << ": mean " << m << " expected "
+                                    << expected[c];
+        std::printf("[ %s ] channel %d: mean %.5f expected %.5f z = %+.2f, %d/%zu pixel outliers\n",
+                    what.c_str(), c, m, expected[c], z, bad, sum.size());
     }
 }
 
 // A closed sphere (radius 1) emitting L inward over a black surface; inside it a null-boundary sphere filled
-// with a conservative (albedo 1), forward-scattering medium in which the camera sits. Radiance is L everywhere
-// inside (the equilibrium of a non-absorbing medium in a uniformly glowing cavity). The extinction is grey: with
-// a chromatic one the per-segment channel weights make the estimate heavy-tailed (unbiased, but 16 batches
-// then underestimate its standard error).
+// with a conservative (albedo 1), forward-scattering medium in which the camera sits. Radiance is L
+// everywhere inside (the equilibrium of a non-absorbing medium in a uniformly glowing cavity). The extinction
+// is grey: with a chromatic one the per-segment channel weights make the estimate heavy-tailed (unbiased, but
+// 16 batches then underestimate its standard error).
 std::unique_ptr<Scene> medium_furnace(const std::string& integrator) {
     return load_scene_string(
         "<scene version=\"3.0.0\">" + vp_integrator(integrator) +
         "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_t\" value=\"2\"/>"
-        "<float name=\"albedo\" value=\"1\"/><phase type=\"hg\"><float name=\"g\" value=\"0.5\"/></phase></medium>" +
+        "<float name=\"albedo\" value=\"1\"/><phase type=\"hg\"><float name=\"g\" "
+        "value=\"0.5\"/></phase></medium>" +
         vp_sensor("<lookat origin=\"0,0,0\" target=\"0,0,1\" up=\"0,1,0\"/>", 8,
                   "<float name=\"fov\" value=\"90\"/><ref id=\"fog\"/>") +
         "<shape type=\"sphere\"><boolean name=\"flip_normals\" value=\"true\"/>"
@@ -89,9 +92,9 @@ TEST(VolPath, MediumFurnaceIsUniform) {
                               std::string("furnace ") + integrator);
 }
 
-// An orthographic camera (view [-1,1]²) looks through a purely absorbing slab (thickness 1, null boundary) at an
-// area light that just covers the view: every pixel is L exp(-sigma_t,c · 1) per channel. ptracer needs more
-// paths: only the fraction 4/5.76 of its emitted points lands in the view, one pixel each.
+// An orthographic camera (view [-1,1]²) looks through a purely absorbing slab (thickness 1, null boundary) at
+// an area light that just covers the view: every pixel is L exp(-sigma_t,c · 1) per channel. ptracer needs
+// more paths: only the fraction 4/5.76 of its emitted points lands in the view, one pixel each.
 TEST(VolPath, AbsorbingSlabTransmittance) {
     const Color3f sigma(0.3f, 1.f, 2.5f), L(2.f, 3.f, 4.f);
     for (const char* integrator : kVolumetric) {
@@ -102,27 +105,31 @@ TEST(VolPath, AbsorbingSlabTransmittance) {
             vp_sensor("<lookat origin=\"0,0,5\" target=\"0,0,0\" up=\"0,1,0\"/>", 8, "", "orthographic") +
             "<shape type=\"cube\"><transform name=\"to_world\"><scale value=\"1.5, 1.5, 0.5\"/></transform>"
             "<bsdf type=\"null\"/><ref name=\"interior\" id=\"ink\"/></shape>"
-            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"1.2\"/><translate value=\"0,0,-2\"/>"
-            "</transform><emitter type=\"area\"><rgb name=\"radiance\" value=\"2, 3, 4\"/></emitter></shape></scene>");
+            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"1.2\"/><translate "
+            "value=\"0,0,-2\"/>"
+            "</transform><emitter type=\"area\"><rgb name=\"radiance\" value=\"2, 3, "
+            "4\"/></emitter></shape></scene>");
         const Color3f expected(L.x * std::exp(-sigma.x), L.y * std::exp(-sigma.y), L.z * std::exp(-sigma.z));
         const bool ptracer = std::string(integrator) == "ptracer";
         expect_constant_image(*scene, 16, ptracer ? 64 : 4, expected, std::string("slab ") + integrator);
     }
 }
 
-// Null boundaries are not bounces (Mitsuba's volpath): with max_depth 1 an emitter behind an empty null box is
-// still seen, exactly.
+// Null boundaries are not bounces (Mitsuba's volpath): with max_depth 1 an emitter behind an empty null box
+// is still seen, exactly.
 TEST(VolPath, NullCrossingsDoNotCountAsBounces) {
     auto scene = load_scene_string(
         "<scene version=\"3.0.0\">" + vp_integrator("volpath", "<integer name=\"max_depth\" value=\"1\"/>") +
         vp_sensor("<lookat origin=\"0,0,5\" target=\"0,0,0\" up=\"0,1,0\"/>", 4, "", "orthographic") +
         "<shape type=\"cube\"><transform name=\"to_world\"><scale value=\"3, 3, 0.5\"/></transform>"
         "<bsdf type=\"null\"/></shape>"
-        "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"4\"/><translate value=\"0,0,-2\"/>"
+        "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"4\"/><translate "
+        "value=\"0,0,-2\"/>"
         "</transform><emitter type=\"area\"><rgb name=\"radiance\" value=\"2\"/></emitter></shape></scene>");
     RenderOptions opt;
     opt.spp = 2;
-    for (const Color3f& p : render(*scene, opt).pixels) EXPECT_NEAR(p.x, 2.f, 1e-5f);
+    for (const Color3f& p : render(*scene, opt).pixels)
+        EXPECT_NEAR(p.x, 2.f, 1e-5f);
 }
 
 // Without media the estimators follow path's sample stream and arithmetic: the same image up to rounding
@@ -134,9 +141,11 @@ TEST(VolPath, MatchesPathWithoutMedia) {
             vp_sensor("<lookat origin=\"0,2,4\" target=\"0,0,0\" up=\"0,1,0\"/>", 16,
                       "<float name=\"fov\" value=\"45\"/>") +
             "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/><rotate x=\"1\" "
-            "angle=\"-90\"/></transform><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.7, 0.5, 0.3\"/>"
+            "angle=\"-90\"/></transform><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.7, 0.5, "
+            "0.3\"/>"
             "</bsdf></shape>"
-            "<shape type=\"cube\"><transform name=\"to_world\"><scale value=\"0.4\"/><translate value=\"0,0.4,0\"/>"
+            "<shape type=\"cube\"><transform name=\"to_world\"><scale value=\"0.4\"/><translate "
+            "value=\"0,0.4,0\"/>"
             "</transform><bsdf type=\"roughplastic\"/></shape>"
             "<shape type=\"sphere\"><point name=\"center\" value=\"0.9,0.4,0.5\"/><float name=\"radius\" "
             "value=\"0.4\"/><bsdf type=\"dielectric\"/></shape>"
@@ -173,17 +182,18 @@ TEST(VolPath, ImagesAreIdenticalWhateverTheThreadCount) {
         two.threads = 2;
         const Image a = render(*scene, one), b = render(*scene, two);
         ASSERT_EQ(a.pixels.size(), b.pixels.size());
-        for (size_t i = 0; i < a.pixels.size(); ++i) ASSERT_EQ(a.pixels[i], b.pixels[i]) << integrator << " pixel " << i;
+        for (size_t i = 0; i < a.pixels.size(); ++i)
+            ASSERT_EQ(a.pixels[i], b.pixels[i]) << integrator << " pixel " << i;
         RenderOptions other = one;
         other.seed = 43;
         EXPECT_NE(render(*scene, other).pixels, a.pixels) << integrator << ": the seed must change the image";
     }
 }
 
-// A point light nesting its medium (Mitsuba's `medium` child of emitters) in a haze box: ptracer starts its light
-// paths in the declared medium, the same one the walk from the sensor finds without it (render/light_medium.h),
-// so the image is the same bit for bit; nesting another medium changes it; a second nested medium is a load
-// error.
+// A point light nesting its medium (Mitsuba's `medium` child of emitters) in a haze box: ptracer starts its
+// light paths in the declared medium, the same one the walk from the sensor finds without it
+// (render/light_medium.h), so the image is the same bit for bit; nesting another medium changes it; a second
+// nested medium is a load error.
 TEST(VolPath, PointLightNestsItsMedium) {
     auto make = [](const std::string& nested) {
         return load_scene_string(
@@ -192,7 +202,8 @@ TEST(VolPath, PointLightNestsItsMedium) {
             "<medium type=\"homogeneous\" id=\"smoke\"><float name=\"sigma_t\" value=\"3\"/></medium>" +
             vp_sensor("<lookat origin=\"0,0,5\" target=\"0,0,0\" up=\"0,1,0\"/>", 8) +
             "<shape type=\"cube\"><bsdf type=\"null\"/><ref name=\"interior\" id=\"haze\"/></shape>"
-            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/><translate value=\"0,0,-1.5\"/>"
+            "<shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/><translate "
+            "value=\"0,0,-1.5\"/>"
             "</transform></shape><emitter type=\"point\"><point name=\"position\" value=\"0.2,0.3,0\"/>" +
             nested + "</emitter></scene>");
     };
@@ -202,13 +213,15 @@ TEST(VolPath, PointLightNestsItsMedium) {
     EXPECT_EQ(walked.pixels, nested.pixels);
     EXPECT_NE(render(*make("<ref id=\"smoke\"/>"), opt).pixels, walked.pixels);
     double sum = 0;
-    for (const Color3f& p : walked.pixels) sum += p.x;
+    for (const Color3f& p : walked.pixels)
+        sum += p.x;
     EXPECT_GT(sum, 0.0);
     EXPECT_THROW(make("<ref id=\"haze\"/><ref id=\"haze\"/>"), LoadError);
 }
 
-// Mitsuba's documentation scene for the homogeneous medium (a bunny of dense, forward-scattering medium behind
-// a rough dielectric, sample_emitters off) renders with volpath: a 16x12 crop of the frame's centre at 2 spp.
+// Mitsuba's documentation scene for the homogeneous medium (a bunny of dense, forward-scattering medium
+// behind a rough dielectric, sample_emitters off) renders with volpath: a 16x12 crop of the frame's centre at
+// 2 spp.
 TEST(VolPath, MitsubaHomogeneousSSSDocScene) {
     const std::filesystem::path file = "/work/shared/mitsuba-data/docs/scenes/medium_homogeneous_sss.xml";
     if (!std::filesystem::exists(file)) GTEST_SKIP() << file << " is not available";

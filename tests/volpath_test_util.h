@@ -18,8 +18,9 @@ inline std::string vp_sensor(const std::string& transform, int res, const std::s
                              const std::string& type = "perspective") {
     return "<sensor type=\"" + type + "\">" + extra + "<transform name=\"to_world\">" + transform +
            "</transform><sampler type=\"independent\"><integer name=\"sample_count\" value=\"4\"/></sampler>"
-           "<film type=\"hdrfilm\"><integer name=\"width\" value=\"" + std::to_string(res) +
-           "\"/><integer name=\"height\" value=\"" + std::to_string(res) + "\"/><rfilter type=\"box\"/></film></sensor>";
+           "<film type=\"hdrfilm\"><integer name=\"width\" value=\"" +
+           std::to_string(res) + "\"/><integer name=\"height\" value=\"" + std::to_string(res) +
+           "\"/><rfilter type=\"box\"/></film></sensor>";
 }
 
 inline std::string vp_integrator(const std::string& type, const std::string& extra = "") {
@@ -30,7 +31,7 @@ inline std::string vp_integrator(const std::string& type, const std::string& ext
 struct BlockStats {
     int blocks_x = 0, blocks_y = 0;
     std::vector<double> mean, stderr_; // index (by * blocks_x + bx) * 3 + c; the last 3 entries: image mean
-    double pixel_variance = 0;          // per-render pixel variance averaged over pixels and channels
+    double pixel_variance = 0;         // per-render pixel variance averaged over pixels and channels
     double channel_variance[3] = {0, 0, 0}; // the same per channel
 };
 
@@ -67,7 +68,8 @@ inline BlockStats block_stats(const Scene& scene, int batches, int spp, uint64_t
     s.stderr_.resize(n);
     for (size_t i = 0; i < n; ++i) {
         s.mean[i] = sum[i] / batches;
-        const double var = std::max(0.0, (sum2[i] / batches - s.mean[i] * s.mean[i]) * batches / (batches - 1));
+        const double var =
+            std::max(0.0, (sum2[i] / batches - s.mean[i] * s.mean[i]) * batches / (batches - 1));
         s.stderr_[i] = std::sqrt(var / batches);
     }
     for (size_t i = 0; i < pix.size(); ++i) {
@@ -79,12 +81,13 @@ inline BlockStats block_stats(const Scene& scene, int batches, int spp, uint64_t
     return s;
 }
 
-// Agreement of two estimators: |z| of the image mean below 4, and at most one block with a channel beyond |z| = 4
-// (with 15 degrees of freedom P(|t| > 4) ~ 1.2e-3 per entry: ~0.1 expected among ~100 entries if both are
+// Agreement of two estimators: |z| of the image mean below 4, and at most one block with a channel beyond |z|
+// = 4 (with 15 degrees of freedom P(|t| > 4) ~ 1.2e-3 per entry: ~0.1 expected among ~100 entries if both are
 // unbiased; blocks, not channels, are counted because grey scenes correlate the channels of a block).
 // Entries whose standard error is zero on both sides must agree to 1e-6. `channel` >= 0 compares that channel
 // only. Returns the largest block |z|.
-inline double expect_agreement(const BlockStats& a, const BlockStats& b, const std::string& what, int channel = -1) {
+inline double expect_agreement(const BlockStats& a, const BlockStats& b, const std::string& what,
+                               int channel = -1) {
     const size_t n = a.mean.size();
     EXPECT_EQ(n, b.mean.size());
     double max_z = 0;
@@ -100,8 +103,8 @@ inline double expect_agreement(const BlockStats& a, const BlockStats& b, const s
             outlier_block = int(i / 3);
         }
         if (z > 3.5 && std::getenv("VP_VERBOSE"))
-            std::printf("block %zu channel %zu: %.3e +- %.3e vs %.3e +- %.3e\n", i / 3, i % 3, a.mean[i], a.stderr_[i],
-                        b.mean[i], b.stderr_[i]);
+            std::printf("block %zu channel %zu: %.3e +- %.3e vs %.3e +- %.3e\n", i / 3, i % 3, a.mean[i],
+                        a.stderr_[i], b.mean[i], b.stderr_[i]);
     }
     for (int c = 0; c < 3; ++c) {
         if (channel >= 0 && c != channel) continue;
@@ -112,8 +115,8 @@ inline double expect_agreement(const BlockStats& a, const BlockStats& b, const s
         std::printf("[ %s ] image mean z (channel %d) = %+.2f\n", what.c_str(), c, z);
     }
     EXPECT_LE(outliers, 1) << what << ": blocks beyond 4 standard errors";
-    std::printf("[ %s ] max block |z| = %.2f over %zu block channels, %d blocks beyond 4\n", what.c_str(), max_z,
-                channel >= 0 ? (n - 3) / 3 : n - 3, outliers);
+    std::printf("[ %s ] max block |z| = %.2f over %zu block channels, %d blocks beyond 4\n", what.c_str(),
+                max_z, channel >= 0 ? (n - 3) / 3 : n - 3, outliers);
     return max_z;
 }
 

@@ -26,7 +26,7 @@ struct BDPTContext {
     const BDPTSettings& settings;
     Sampler& sampler;
     RayCounter& rays;
-    bool has_media;        // some shape or the sensor declares a medium
+    bool has_media;        // the sensor, a shape or an emitter declares a medium (scene_has_media)
     bool sensor_connects;  // scene points can be connected to the sensor (not a radiance/irradiance meter)
     BoundingSphere bounds; // the disk infinite lights emit from has this radius
 };

@@ -43,8 +43,8 @@ HeroFreeFlight sample_homogeneous(const Medium& medium, const Vec3f& o, const Ve
 
 } // namespace
 
-HeroFreeFlight sample_free_flight_hero(const Medium& medium, const Vec3f& o, const Vec3f& d, float tmax, int hero,
-                                       Sampler& sampler) {
+HeroFreeFlight sample_free_flight_hero(const Medium& medium, const Vec3f& o, const Vec3f& d, float tmax,
+                                       int hero, Sampler& sampler) {
     if (medium.is_homogeneous()) return sample_homogeneous(medium, o, d, tmax, hero, sampler);
     HeroFreeFlight s;
     for_each_tentative_collision(medium, o, d, tmax, sampler, [&](float t, const Vec3f& p, float m) {

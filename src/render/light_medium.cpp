@@ -34,7 +34,8 @@ const Medium* medium_at(const Scene& scene, const Vec3f& x, RayCounter& rays) {
     return medium;
 }
 
-const Medium* emitter_medium(const Scene& scene, const Emitter& emitter, const Vec3f& origin, RayCounter& rays) {
+const Medium* emitter_medium(const Scene& scene, const Emitter& emitter, const Vec3f& origin,
+                             RayCounter& rays) {
     if (emitter.medium) return emitter.medium.get();
     const Shape* shape = emitter.shape();
     if (shape && (shape->interior || shape->exterior)) return shape->exterior.get();

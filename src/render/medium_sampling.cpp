@@ -115,8 +115,8 @@ float free_flight_pdf(const Medium& medium, const Vec3f& o, const Vec3f& d, floa
     if (medium.is_homogeneous()) {
         const Color3f sigma_t = medium.sigma_t(o);
         const Color3f tr = std::isinf(t) ? Color3f(sigma_t.x > 0.f ? 0.f : 1.f, sigma_t.y > 0.f ? 0.f : 1.f,
-                                                    sigma_t.z > 0.f ? 0.f : 1.f)
-                                          : exp_neg(sigma_t * t);
+                                                   sigma_t.z > 0.f ? 0.f : 1.f)
+                                         : exp_neg(sigma_t * t);
         return mean(scattered ? sigma_t * tr : tr);
     }
     // Midpoint rule on every segment where the medium may be non-zero (16 steps each).
@@ -129,7 +129,8 @@ float free_flight_pdf(const Medium& medium, const Vec3f& o, const Vec3f& d, floa
             return false;
         }
         const float h = (t1 - t0) / steps;
-        for (int i = 0; i < steps; ++i) optical_depth += mean(medium.sigma_t(o + d * (t0 + (i + 0.5f) * h))) * h;
+        for (int i = 0; i < steps; ++i)
+            optical_depth += mean(medium.sigma_t(o + d * (t0 + (i + 0.5f) * h))) * h;
         return true;
     });
     const float tr = std::exp(-optical_depth);

@@ -1,5 +1,5 @@
-// `volpath` and `volpathmis`: unidirectional volumetric path tracers (Mitsuba 3's plugins of these names). The
-// estimator is render/volpath_tracer.h.
+// `volpath` and `volpathmis`: unidirectional volumetric path tracers (Mitsuba 3's plugins of these names).
+// The estimator is render/volpath_tracer.h.
 //
 // | parameter      | type    | default | meaning                                                    |
 // |----------------|---------|---------|------------------------------------------------------------|
@@ -8,11 +8,12 @@
 // | hide_emitters  | boolean | false   | do not show directly visible emitters                      |
 //
 // Chromatic media (per-channel sigma_t): `volpath` chooses the channel that drives each free-flight distance
-// anew for every segment and weights the segment by the channel-averaged density (one-sample balance heuristic
-// per segment: unbiased even where a channel has sigma_t = 0, unlike Mitsuba's volpath, which divides by the
-// chosen channel's density alone). `volpathmis` chooses one hero channel per path and weights the whole path by
-// the channel-averaged path density (pbrt-v4's r_u; Mitsuba's volpathmis does the same): lower variance for
-// long paths in strongly chromatic media, where per-segment weights multiply up to 3 per segment.
+// anew for every segment and weights the segment by the channel-averaged density (one-sample balance
+// heuristic per segment: unbiased even where a channel has sigma_t = 0, unlike Mitsuba's volpath, which
+// divides by the chosen channel's density alone). `volpathmis` chooses one hero channel per path and weights
+// the whole path by the channel-averaged path density (pbrt-v4's r_u; Mitsuba's volpathmis does the same):
+// lower variance for long paths in strongly chromatic media, where per-segment weights multiply up to 3 per
+// segment.
 #include "render/volpath.h"
 
 namespace penumbra {

@@ -6,12 +6,13 @@ namespace penumbra {
 
 // `volpath` (spectral MIS per free-flight segment) and `volpathmis` (spectral MIS over whole paths).
 class VolPathIntegrator final : public SamplingIntegrator {
-public:
+  public:
     VolPathIntegrator(const Properties& props, SpectralMIS spectral);
-    void sample(const Scene& scene, Sampler& sampler, const Ray& ray, Color3f* out, RayCounter& rays) const override;
+    void sample(const Scene& scene, Sampler& sampler, const Ray& ray, Color3f* out,
+                RayCounter& rays) const override;
     const PathSettings& settings() const { return settings_; }
 
-private:
+  private:
     PathSettings settings_;
     SpectralMIS spectral_;
 };

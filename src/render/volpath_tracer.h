@@ -1,21 +1,21 @@
 // Unidirectional volumetric path tracing (Mitsuba 3's `volpath` and `volpathmis`): the radiative transfer
 // equation sampled from the camera, with free-flight sampling in media (render/medium_sampling.h), next-event
 // estimation at surface and medium vertices through media and index-matched (null) boundaries
-// (segment_transmittance), and MIS with the power heuristic (Veach 1997, Eq. 9.13) between emitter sampling and
-// BSDF / phase-function sampling, as render/path_tracer.h does for surfaces.
+// (segment_transmittance), and MIS with the power heuristic (Veach 1997, Eq. 9.13) between emitter sampling
+// and BSDF / phase-function sampling, as render/path_tracer.h does for surfaces.
 //
 // MIS uses the solid-angle densities of the direction only: both strategies see the same transmittance (NEE
 // estimates it, BSDF/phase sampling reaches the emitter with the free-flight pass weights), so the weights of
 // the two strategies sum to one for every path and the estimator stays unbiased.
 //
-// Depth (Mitsuba): the number of scattering vertices (surface or medium); crossing a null lobe is not one. A path
-// with k scattering vertices is counted if k < max_depth. Russian roulette as path_tracer.h.
+// Depth (Mitsuba): the number of scattering vertices (surface or medium); crossing a null lobe is not one. A
+// path with k scattering vertices is counted if k < max_depth. Russian roulette as path_tracer.h.
 //
 // Spectral MIS: `PerSegment` (volpath) draws each free flight with the per-segment channel balance of
 // sample_free_flight; `PerPath` (volpathmis) draws a hero channel once per path and weights the whole path by
-// the balance heuristic over channels (render/hero_free_flight.h). Surface and phase sampling do not depend on
-// the channel, so both are unbiased; whole-path MIS bounds the weight of a path by 3 where per-segment MIS can
-// give 3^k for k segments in a strongly chromatic medium.
+// the balance heuristic over channels (render/hero_free_flight.h). Surface and phase sampling do not depend
+// on the channel, so both are unbiased; whole-path MIS bounds the weight of a path by 3 where per-segment MIS
+// can give 3^k for k segments in a strongly chromatic medium.
 //
 // The estimator is written on the scalar type T of the accumulated radiance (T = float renders); sampling and
 // the densities of MIS and Russian roulette are float.
@@ -49,8 +49,9 @@ template <typename T> struct PathState {
     // The last scattering vertex (or the camera), for the MIS weight of emission found by sampling.
     Interaction3f last;
     float last_pdf = 1.f;
-    bool last_unweighted = true; // emission found next has weight 1 (camera, delta lobe, no NEE at the vertex)
-    float travelled = 0.f;       // distance from the last scattering vertex along the current direction
+    bool last_unweighted =
+        true;              // emission found next has weight 1 (camera, delta lobe, no NEE at the vertex)
+    float travelled = 0.f; // distance from the last scattering vertex along the current direction
 
     // beta / mean(ratio): the path's estimate factor.
     Color3<T> weight() const { return beta / T(mean(ratio)); }
@@ -76,7 +77,8 @@ Color3f next_event(const Scene& scene, const Interaction3f& ref, const SurfaceIn
 }
 
 // Russian roulette after a scattering vertex (path_tracer.h's rule on the path's estimate factor).
-template <typename T> bool survives_roulette(PathState<T>& s, const PathSettings& settings, Sampler& sampler) {
+template <typename T>
+bool survives_roulette(PathState<T>& s, const PathSettings& settings, Sampler& sampler) {
     if (s.depth < unsigned(settings.rr_depth)) return true;
     const Color3<T> w = s.weight();
     const Color3f wf(detach(w.x), detach(w.y), detach(w.z));
@@ -90,8 +92,8 @@ template <typename T> bool survives_roulette(PathState<T>& s, const PathSettings
 
 // Radiance arriving at the sensor along `primary`, estimated along one sampled path.
 template <typename T>
-Color3<T> trace_volpath(const Scene& scene, Sampler& sampler, const Ray& primary, const PathSettings& settings,
-                        SpectralMIS spectral, RayCounter& rays) {
+Color3<T> trace_volpath(const Scene& scene, Sampler& sampler, const Ray& primary,
+                        const PathSettings& settings, SpectralMIS spectral, RayCounter& rays) {
     using namespace volpath_detail;
     const BSDFContext ctx{TransportMode::Radiance};
     PathState<T> s;
@@ -160,9 +162,10 @@ Color3<T> trace_volpath(const Scene& scene, Sampler& sampler, const Ray& primary
         if (!(s.depth == 0 && settings.hide_emitters)) {
             SurfaceInteraction3f seen = si;
             seen.t = s.travelled + si.t;
-            for_each_emitter_hit(scene, s.last, ray.d, seen, [&](const Emitter*, const Color3f& Le, float em_pdf) {
-                s.add(Le * (s.last_unweighted ? 1.f : mis_power(s.last_pdf, em_pdf)));
-            });
+            for_each_emitter_hit(scene, s.last, ray.d, seen,
+                                 [&](const Emitter*, const Color3f& Le, float em_pdf) {
+                                     s.add(Le * (s.last_unweighted ? 1.f : mis_power(s.last_pdf, em_pdf)));
+                                 });
         }
         if (!si.is_valid()) break;
         const BSDF* bsdf = si.bsdf();
@@ -190,8 +193,9 @@ Color3<T> trace_volpath(const Scene& scene, Sampler& sampler, const Ray& primary
         ray = si.spawn_ray(d);
         ++rays.rays;
         if (null) {
-            // Next-event estimation crosses pure null surfaces only (segment_transmittance): beyond the null lobe
-            // of any other BSDF (mask, blends) it saw nothing, so emission found from here on takes weight 1.
+            // Next-event estimation crosses pure null surfaces only (segment_transmittance): beyond the null
+            // lobe of any other BSDF (mask, blends) it saw nothing, so emission found from here on takes
+            // weight 1.
             if (bsdf->flags() != BSDFNull) s.last_unweighted = true;
             s.travelled += si.t;
             continue;

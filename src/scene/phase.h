@@ -16,7 +16,7 @@ namespace penumbra {
 class PhaseFunction : public Object {
   public:
     ObjectKind kind() const override { return ObjectKind::Phase; }
-    float g = 0.f; // Henyey-Greenstein asymmetry (0 = isotropic), in (-1, 1)
+    float g = 0.f;    // Henyey-Greenstein asymmetry (0 = isotropic), in (-1, 1)
     int g_index = -1; // parameter index of g when differentiated
 
     // p(wi, wo) = (1 - g²) / (4π (1 + g² + 2 g (wi·wo))^{3/2})  (Henyey & Greenstein 1941, Mitsuba's sign).

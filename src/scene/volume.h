@@ -22,7 +22,7 @@ class Volume : public Object {
   public:
     ObjectKind kind() const override { return ObjectKind::Volume; }
 #define PENUMBRA_VOLUME_METHODS(T)                                                                           \
-    /* The value at world point p (RGB; single-channel grids repeat their value in the three channels). */  \
+    /* The value at world point p (RGB; single-channel grids repeat their value in the three channels). */   \
     virtual Color3<T> eval(const Vec3<T>& p) const = 0;
     PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_VOLUME_METHODS)
 #undef PENUMBRA_VOLUME_METHODS
@@ -56,7 +56,9 @@ class Volume : public Object {
 template <typename Derived> class VolumeBase : public Volume {
   public:
 #define PENUMBRA_VOLUME_IMPL(T)                                                                              \
-    Color3<T> eval(const Vec3<T>& p) const override { return static_cast<const Derived*>(this)->template eval_t<T>(p); }
+    Color3<T> eval(const Vec3<T>& p) const override {                                                        \
+        return static_cast<const Derived*>(this)->template eval_t<T>(p);                                     \
+    }
     PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_VOLUME_IMPL)
 #undef PENUMBRA_VOLUME_IMPL
 };

@@ -8,8 +8,9 @@
 //   wrap_mode      string     clamp       clamp | repeat | mirror: lookups outside the unit cube
 //   to_world       transform  identity    places the grid's unit cube [0, 1]^3 in the world
 //   use_grid_bbox  boolean    false       .vol: the unit cube is first mapped to the bounding box stored in
-//                                         the file, then by to_world. .vdb grids are always placed by their own
-//                                         index-to-world transform (then to_world); the flag changes nothing
+//                                         the file, then by to_world. .vdb grids are always placed by their
+//                                         own index-to-world transform (then to_world); the flag changes
+//                                         nothing
 //   raw            boolean    false       accepted: penumbra renders in RGB, so 3-channel values are used as
 //                                         stored in either case (Mitsuba's flag only disables the spectral
 //                                         upsampling of its spectral variants)
