@@ -23,22 +23,25 @@ using namespace penumbra;
 
 namespace {
 
+// The scene's opening: `integrator` (max_depth 8) and a perspective camera of `res` x `res` pixels.
+std::string scene_head(const std::string& integrator, float fov, const std::string& lookat, int res,
+                       const std::string& sensor_medium = "") {
+    return R"(<scene version="3.0.0"><integrator type=")" + integrator +
+           R"("><integer name="max_depth" value="8"/></integrator><sensor type="perspective"><float name="fov" value=")" +
+           std::to_string(fov) + R"("/><transform name="to_world">)" + lookat + "</transform>" +
+           sensor_medium + R"(<film type="hdrfilm"><integer name="width" value=")" + std::to_string(res) +
+           R"("/><integer name="height" value=")" + std::to_string(res) + R"("/></film></sensor>)";
+}
+
 // A closed diffuse room with a box and a sphere, lit by a ceiling panel; `haze` fills it with a medium.
 std::string room_scene(const std::string& integrator, bool haze, int res) {
     const std::string medium_ref = haze ? R"(<ref name="interior" id="haze"/>)" : "";
     const std::string exterior_ref = haze ? R"(<ref name="exterior" id="haze"/>)" : "";
-    return R"(<scene version="3.0.0">
-  <integrator type=")" +
-           integrator + R"("><integer name="max_depth" value="8"/></integrator>
+    return scene_head(integrator, 60.f, R"(<lookat origin="0, 0, 1.8" target="0, -0.2, 0" up="0, 1, 0"/>)",
+                      res, haze ? R"(<ref name="medium" id="haze"/>)" : "") +
+           R"(
   <medium type="homogeneous" id="haze"><float name="sigma_t" value="0.3"/><rgb name="albedo" value="0.8"/>
     <phase type="hg"><float name="g" value="0.4"/></phase></medium>
-  <sensor type="perspective"><float name="fov" value="60"/>
-    <transform name="to_world"><lookat origin="0, 0, 1.8" target="0, -0.2, 0" up="0, 1, 0"/></transform>)" +
-           (haze ? R"(<ref name="medium" id="haze"/>)" : "") + R"(
-    <film type="hdrfilm"><integer name="width" value=")" +
-           std::to_string(res) + R"("/>
-      <integer name="height" value=")" +
-           std::to_string(res) + R"("/></film></sensor>
   <shape type="cube"><transform name="to_world"><scale value="2"/></transform>
     <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.6"/></bsdf></bsdf>)" +
            medium_ref + R"(</shape>
@@ -59,15 +62,9 @@ std::string room_scene(const std::string& integrator, bool haze, int res) {
 // caustic under the sphere is found by a unidirectional tracer only when BSDF sampling through the glass hits
 // the small light, and by bdpt through light tracing and connections of light subpaths.
 std::string caustic_scene(const std::string& integrator, int res) {
-    return R"(<scene version="3.0.0">
-  <integrator type=")" +
-           integrator + R"("><integer name="max_depth" value="8"/></integrator>
-  <sensor type="perspective"><float name="fov" value="35"/>
-    <transform name="to_world"><lookat origin="0, 2.2, -2.2" target="0, 0.2, 0" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value=")" +
-           std::to_string(res) + R"("/>
-      <integer name="height" value=")" +
-           std::to_string(res) + R"("/></film></sensor>
+    return scene_head(integrator, 35.f, R"(<lookat origin="0, 2.2, -2.2" target="0, 0.2, 0" up="0, 1, 0"/>)",
+                      res) +
+           R"(
   <shape type="rectangle"><transform name="to_world"><scale value="2"/><rotate x="1" angle="-90"/></transform>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.8"/></bsdf></shape>
   <shape type="sphere"><point name="center" value="0, 0.6, 0"/><float name="radius" value="0.4"/>
@@ -92,15 +89,8 @@ std::string opening_scene(const std::string& integrator, int res) {
                     R"("/><rotate y="1" angle="-90"/><translate x="1" y=")" + std::to_string(y) + R"(" z=")" +
                     std::to_string(z) + R"("/>)");
     };
-    return R"(<scene version="3.0.0">
-  <integrator type=")" +
-           integrator + R"("><integer name="max_depth" value="8"/></integrator>
-  <sensor type="perspective"><float name="fov" value="70"/>
-    <transform name="to_world"><lookat origin="0, 0, 0.9" target="0, 0, -1" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value=")" +
-           std::to_string(res) + R"("/>
-      <integer name="height" value=")" +
-           std::to_string(res) + R"("/></film></sensor>)" +
+    return scene_head(integrator, 70.f, R"(<lookat origin="0, 0, 0.9" target="0, 0, -1" up="0, 1, 0"/>)",
+                      res) +
            wall(R"(<rotate x="1" angle="-90"/><translate y="-1"/>)") +
            wall(R"(<rotate x="1" angle="90"/><translate y="1"/>)") + wall(R"(<translate z="-1"/>)") +
            wall(R"(<rotate y="1" angle="180"/><translate z="1"/>)") +

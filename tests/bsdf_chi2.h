@@ -1,5 +1,6 @@
-// Test helpers for BSDFs: a constant texture, and a chi-square goodness-of-fit test of BSDF::sample against
-// BSDF::pdf on a (cos theta, phi) histogram (as Mitsuba's test suite does).
+// Test helpers for BSDFs: a constant texture, and a chi-square goodness-of-fit test of sampled directions
+// against their density on a (cos theta, phi) histogram (as Mitsuba's test suite does), for BSDF::sample
+// against BSDF::pdf and for phase functions.
 #pragma once
 #include "core/rng.h"
 #include "scene/bsdf.h"
@@ -48,19 +49,19 @@ struct Chi2Result {
     std::string report;
 };
 
-// Draws n samples from bsdf at si, histograms the non-delta directions over n_cos x n_phi bins of
-// (cos theta in [-1, 1], phi in [0, 2 pi)) (equal solid angle per bin) and compares with n * int_bin pdf,
-// integrated with a sub x sub midpoint rule. Bins expecting fewer than 5 samples are pooled.
-inline Chi2Result bsdf_chi2(const BSDF& bsdf, const SurfaceInteraction3f& si, const BSDFContext& ctx, int n,
-                            uint64_t seed, int n_cos = 20, int n_phi = 40, int sub = 12) {
+// A chi-square goodness-of-fit test of sampled directions against their density: draws n directions with
+// sample(rng, wo) (false: no direction, e.g. a failed or delta sample, not counted), histograms them over
+// n_cos x n_phi bins of (cos theta in [-1, 1], phi in [0, 2 pi)) (equal solid angle per bin) and compares with
+// n * int_bin pdf(wo), integrated with a sub x sub midpoint rule. Bins expecting fewer than 5 samples are pooled.
+template <typename Sample, typename Pdf>
+Chi2Result direction_chi2(Sample&& sample, Pdf&& pdf, int n, uint64_t seed, int n_cos = 20, int n_phi = 40,
+                          int sub = 12) {
     std::vector<double> observed(size_t(n_cos * n_phi), 0.0), expected(size_t(n_cos * n_phi), 0.0);
     PCG32 rng(seed);
     for (int i = 0; i < n; ++i) {
-        const float u1 = rng.next_float();
-        const Vec2f u2(rng.next_float(), rng.next_float());
-        const auto [bs, w] = bsdf.sample(ctx, si, u1, u2);
-        if (bs.pdf == 0.f || is_black(w) || (bs.sampled_type & BSDFDelta)) continue;
-        const Vec3f wo = normalize(bs.wo);
+        Vec3f wo;
+        if (!sample(rng, wo)) continue;
+        wo = normalize(wo);
         float phi = std::atan2(wo.y, wo.x);
         if (phi < 0.f) phi += 2.f * Pi;
         const int ic = std::clamp(int((wo.z + 1.f) * 0.5f * n_cos), 0, n_cos - 1);
@@ -77,7 +78,7 @@ inline Chi2Result bsdf_chi2(const BSDF& bsdf, const SurfaceInteraction3f& si, co
                     const double phi = dphi * (ip + (b + 0.5) / sub);
                     const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
                     const Vec3f wo(float(r * std::cos(phi)), float(r * std::sin(phi)), float(z));
-                    sum += bsdf.pdf(ctx, si, wo);
+                    sum += pdf(wo);
                 }
             expected[size_t(ic * n_phi + ip)] = n * sum * dz * dphi / (sub * sub);
         }
@@ -116,6 +117,20 @@ inline Chi2Result bsdf_chi2(const BSDF& bsdf, const SurfaceInteraction3f& si, co
     os << "chi2 = " << chi2 << ", dof = " << dof << ", p = " << r.p_value << "; worst " << worst.str();
     r.report = os.str();
     return r;
+}
+
+// Draws n samples from bsdf at si and tests the non-delta directions against bsdf.pdf (direction_chi2).
+inline Chi2Result bsdf_chi2(const BSDF& bsdf, const SurfaceInteraction3f& si, const BSDFContext& ctx, int n,
+                            uint64_t seed, int n_cos = 20, int n_phi = 40, int sub = 12) {
+    return direction_chi2(
+        [&](PCG32& rng, Vec3f& wo) {
+            const float u1 = rng.next_float();
+            const Vec2f u2(rng.next_float(), rng.next_float());
+            const auto [bs, w] = bsdf.sample(ctx, si, u1, u2);
+            wo = bs.wo;
+            return !(bs.pdf == 0.f || is_black(w) || (bs.sampled_type & BSDFDelta));
+        },
+        [&](const Vec3f& wo) { return double(bsdf.pdf(ctx, si, wo)); }, n, seed, n_cos, n_phi, sub);
 }
 
 } // namespace penumbra::test

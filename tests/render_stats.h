@@ -4,7 +4,10 @@
 #include "core/batch_stats.h"
 #include "render/render.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace penumbra::test {
@@ -41,6 +44,27 @@ inline BatchStats render_batches(const Scene& scene, int batches, int spp, uint6
     s.image_mean = m;
     s.image_mean_stderr = std::sqrt(std::max(0.0, (m2 / batches - m * m) * batches / (batches - 1)) / batches);
     return s;
+}
+
+// The image of `scene` is bit-identical rendered with 1 and with 2 threads (same seed), is not black, and
+// changes with the seed.
+inline void expect_same_image_whatever_the_thread_count(const Scene& scene, const std::string& what) {
+    RenderOptions one, two;
+    one.spp = two.spp = 4;
+    one.seed = two.seed = 42;
+    one.threads = 1;
+    two.threads = 2;
+    const Image a = render(scene, one), b = render(scene, two);
+    ASSERT_EQ(a.pixels.size(), b.pixels.size()) << what;
+    double sum = 0;
+    for (size_t i = 0; i < a.pixels.size(); ++i) {
+        ASSERT_EQ(a.pixels[i], b.pixels[i]) << what << ": pixel " << i;
+        sum += a.pixels[i].x + a.pixels[i].y + a.pixels[i].z;
+    }
+    EXPECT_GT(sum, 0.0) << what << ": black image";
+    RenderOptions other = one;
+    other.seed = 43;
+    EXPECT_NE(render(scene, other).pixels, a.pixels) << what << ": the seed must change the image";
 }
 
 } // namespace penumbra::test

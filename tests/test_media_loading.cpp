@@ -47,22 +47,9 @@ void expect_color(const Color3f& a, const Color3f& b, float tol, const std::stri
     EXPECT_NEAR(a.z, b.z, tol) << what;
 }
 
-// The message of the LoadError thrown while loading `dir/scene.xml` (one line, starting with its location).
+// The message of the LoadError thrown while loading `dir/scene.xml` (tests/xml_test_util.h).
 std::string load_error(const std::string& dir) {
-    try {
-        load_scene(dir + "/scene.xml");
-    } catch (const LoadError& e) {
-        const std::string msg = e.what();
-        EXPECT_EQ(msg.find('\n'), std::string::npos) << "multi-line error: " << msg;
-        EXPECT_EQ(msg.rfind(e.location.str() + ": ", 0), 0u)
-            << "message does not start with its location: " << msg;
-        return msg;
-    } catch (const std::exception& e) {
-        ADD_FAILURE() << "not a LoadError: " << e.what();
-        return {};
-    }
-    ADD_FAILURE() << "no error";
-    return {};
+    return load_error_of([&] { load_scene(dir + "/scene.xml"); });
 }
 
 // A scene whose sigma_t grid reads `filename`; the filename parameter is on line 5.

@@ -52,54 +52,15 @@ double sphere_integral(const std::function<double(const Vec3f&)>& f, int nz = 20
     return sum * (2.0 / nz) * (2.0 * Pi / nphi);
 }
 
-// Chi-square of n directions drawn by `phase` against the density `pdf_of` on 20 x 40 equal-area bins of
-// world (z, phi) (expected counts by a 12 x 12 midpoint rule per bin; bins under 5 expected pooled).
-double chi2_p_value(const PhaseFunction& phase, const PhaseFunction& pdf_of, int n, uint64_t seed,
-                    std::string& report) {
-    constexpr int n_cos = 20, n_phi = 40, sub = 12;
-    std::vector<double> observed(n_cos * n_phi, 0.0), expected(n_cos * n_phi, 0.0);
-    PCG32 rng(seed);
-    for (int i = 0; i < n; ++i) {
-        const Vec2f u(rng.next_float(), rng.next_float());
-        const Vec3f wo = phase.sample(kWi, u).first;
-        float phi = std::atan2(wo.y, wo.x);
-        if (phi < 0.f) phi += 2.f * Pi;
-        const int ic = std::clamp(int((wo.z + 1.f) * 0.5f * n_cos), 0, n_cos - 1);
-        const int ip = std::clamp(int(phi / (2.f * Pi) * n_phi), 0, n_phi - 1);
-        observed[size_t(ic * n_phi + ip)] += 1.0;
-    }
-    const double dz = 2.0 / n_cos, dphi = 2.0 * Pi / n_phi;
-    for (int ic = 0; ic < n_cos; ++ic)
-        for (int ip = 0; ip < n_phi; ++ip) {
-            double sum = 0.0;
-            for (int a = 0; a < sub; ++a)
-                for (int b = 0; b < sub; ++b) {
-                    const double z = -1.0 + dz * (ic + (a + 0.5) / sub), phi = dphi * (ip + (b + 0.5) / sub);
-                    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-                    sum +=
-                        pdf_of.pdf(kWi, Vec3f(float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)));
-                }
-            expected[size_t(ic * n_phi + ip)] = n * sum * dz * dphi / (sub * sub);
-        }
-    double chi2 = 0.0, pooled_obs = 0.0, pooled_exp = 0.0;
-    int dof = -1;
-    for (size_t i = 0; i < observed.size(); ++i) {
-        if (expected[i] < 5.0) {
-            pooled_obs += observed[i];
-            pooled_exp += expected[i];
-            continue;
-        }
-        chi2 += (observed[i] - expected[i]) * (observed[i] - expected[i]) / expected[i];
-        ++dof;
-    }
-    if (pooled_exp >= 5.0) {
-        chi2 += (pooled_obs - pooled_exp) * (pooled_obs - pooled_exp) / pooled_exp;
-        ++dof;
-    }
-    const double p = chi2_upper_tail(chi2, std::max(dof, 1));
-    report =
-        "chi2 = " + std::to_string(chi2) + ", dof = " + std::to_string(dof) + ", p = " + std::to_string(p);
-    return p;
+// Chi-square of n directions drawn by `phase` against the density of `pdf_of` (tests/bsdf_chi2.h).
+test::Chi2Result phase_chi2(const PhaseFunction& phase, const PhaseFunction& pdf_of, int n, uint64_t seed) {
+    return test::direction_chi2(
+        [&](PCG32& rng, Vec3f& wo) {
+            const Vec2f u(rng.next_float(), rng.next_float());
+            wo = phase.sample(kWi, u).first;
+            return true;
+        },
+        [&](const Vec3f& wo) { return double(pdf_of.pdf(kWi, wo)); }, n, seed);
 }
 
 class MediaPhase : public ::testing::TestWithParam<std::string> {};
@@ -148,10 +109,9 @@ TEST_P(MediaPhase, SampleReturnsEvalAsDensityAndMeanCosineG) {
 // p > 1e-4 over 5 configurations: a correct sampler fails with probability 5e-4 (and the seed is fixed).
 TEST_P(MediaPhase, ChiSquareOfSampledDirections) {
     const auto phase = make(GetParam());
-    std::string report;
-    const double p = chi2_p_value(*phase, *phase, 200000, 7, report);
-    std::printf("  %s: %s\n", GetParam().c_str(), report.c_str());
-    EXPECT_GT(p, 1e-4) << report;
+    const test::Chi2Result r = phase_chi2(*phase, *phase, 200000, 7);
+    std::printf("  %s: %s\n", GetParam().c_str(), r.report.c_str());
+    EXPECT_GT(r.p_value, 1e-4) << r.report;
 }
 
 INSTANTIATE_TEST_SUITE_P(Media, MediaPhase,
@@ -168,8 +128,7 @@ INSTANTIATE_TEST_SUITE_P(Media, MediaPhase,
 
 // The chi-square test has the power to see a small error: samples of g = 0.3 against the density of g = 0.36.
 TEST(MediaPhaseChi2, RejectsSlightlyWrongAsymmetry) {
-    std::string report;
-    const double p = chi2_p_value(*hg(0.3f), *hg(0.36f), 200000, 7, report);
-    std::printf("  g 0.3 vs 0.36: %s\n", report.c_str());
-    EXPECT_LT(p, 1e-6) << report;
+    const test::Chi2Result r = phase_chi2(*hg(0.3f), *hg(0.36f), 200000, 7);
+    std::printf("  g 0.3 vs 0.36: %s\n", r.report.c_str());
+    EXPECT_LT(r.p_value, 1e-6) << r.report;
 }

@@ -2,6 +2,7 @@
 // determinism, and Mitsuba's homogeneous-medium documentation scene. Tolerances are multiples of standard
 // errors estimated from independent renders (16 batches: 15 degrees of freedom, P(|t| > 4) ~ 1.2e-3).
 #include "render/render.h"
+#include "render_stats.h"
 #include "scene/scene.h"
 #include "volpath_test_util.h"
 
@@ -173,21 +174,8 @@ TEST(VolPath, MatchesPathWithoutMedia) {
 }
 
 TEST(VolPath, ImagesAreIdenticalWhateverTheThreadCount) {
-    for (const char* integrator : kVolumetric) {
-        auto scene = medium_furnace(integrator);
-        RenderOptions one, two;
-        one.spp = two.spp = 4;
-        one.seed = two.seed = 42;
-        one.threads = 1;
-        two.threads = 2;
-        const Image a = render(*scene, one), b = render(*scene, two);
-        ASSERT_EQ(a.pixels.size(), b.pixels.size());
-        for (size_t i = 0; i < a.pixels.size(); ++i)
-            ASSERT_EQ(a.pixels[i], b.pixels[i]) << integrator << " pixel " << i;
-        RenderOptions other = one;
-        other.seed = 43;
-        EXPECT_NE(render(*scene, other).pixels, a.pixels) << integrator << ": the seed must change the image";
-    }
+    for (const char* integrator : kVolumetric)
+        expect_same_image_whatever_the_thread_count(*medium_furnace(integrator), integrator);
 }
 
 // A point light nesting its medium (Mitsuba's `medium` child of emitters) in a haze box: ptracer starts its

@@ -14,23 +14,8 @@ using namespace penumbra::test;
 
 namespace {
 
-// The message of the LoadError thrown by `fn` (fails the test if nothing or something else is thrown).
-template <typename Fn> std::string error_of(Fn&& fn) {
-    try {
-        fn();
-    } catch (const LoadError& e) {
-        const std::string msg = e.what();
-        EXPECT_EQ(msg.find('\n'), std::string::npos) << "multi-line error: " << msg;
-        EXPECT_EQ(msg.rfind(e.location.str() + ": ", 0), 0u)
-            << "message does not start with its location: " << msg;
-        return msg;
-    }
-    ADD_FAILURE() << "no LoadError thrown";
-    return {};
-}
-
 std::string string_error(const std::string& xml, const std::map<std::string, std::string>& defines = {}) {
-    return error_of([&] { parse_xml_string(xml, ".", defines); });
+    return load_error_of([&] { parse_xml_string(xml, ".", defines); });
 }
 
 #define EXPECT_CONTAINS(haystack, needle) EXPECT_NE((haystack).find(needle), std::string::npos) << (haystack)
@@ -95,19 +80,19 @@ TEST(XmlErrors, IncludeCycle) {
     dir.write("a.xml", scene("<include filename=\"b.xml\"/>"));
     dir.write("b.xml", scene("\n<include filename=\"a.xml\"/>"));
     const std::string main = dir.write("main.xml", scene("<include filename=\"a.xml\"/>"));
-    const std::string msg = error_of([&] { parse_xml_file(main); });
+    const std::string msg = load_error_of([&] { parse_xml_file(main); });
     EXPECT_CONTAINS(msg, "b.xml:3: include cycle:");
     EXPECT_CONTAINS(msg, "a.xml -> ");
     // Including the main file from itself is a cycle too.
     EXPECT_CONTAINS(
-        error_of([&] { parse_xml_file(dir.write("self.xml", scene("<include filename=\"self.xml\"/>"))); }),
+        load_error_of([&] { parse_xml_file(dir.write("self.xml", scene("<include filename=\"self.xml\"/>"))); }),
         "self.xml:2: include cycle");
 }
 
 TEST(XmlErrors, MissingIncludeFile) {
     TempDir dir;
     const std::string main = dir.write("main.xml", scene("\n<include filename=\"nowhere/parts.xml\"/>"));
-    EXPECT_CONTAINS(error_of([&] { parse_xml_file(main); }),
+    EXPECT_CONTAINS(load_error_of([&] { parse_xml_file(main); }),
                     "main.xml:3: included file 'nowhere/parts.xml' not found");
 }
 
@@ -115,7 +100,7 @@ TEST(XmlErrors, ErrorsInsideIncludedFilesNameThatFile) {
     TempDir dir;
     dir.write("part.xml", scene("<bsdf type=\"diffuse\">\n\n<float name=\"x\" value=\"bad\"/></bsdf>"));
     const std::string main = dir.write("main.xml", scene("<include filename=\"part.xml\"/>"));
-    EXPECT_CONTAINS(error_of([&] { parse_xml_file(main); }), "part.xml:4: <float name=\"x\">");
+    EXPECT_CONTAINS(load_error_of([&] { parse_xml_file(main); }), "part.xml:4: <float name=\"x\">");
 }
 
 TEST(XmlErrors, DuplicateParameterAndId) {
@@ -190,7 +175,7 @@ TEST(XmlErrors, InvalidTransforms) {
 }
 
 TEST(XmlErrors, LoaderRejectsWhatPenumbraCannotRender) {
-    const auto load_error = [](const std::string& xml) { return error_of([&] { load_scene_string(xml); }); };
+    const auto load_error = [](const std::string& xml) { return load_error_of([&] { load_scene_string(xml); }); };
     // Unsupported plugin: exactly one line at the declaration.
     EXPECT_EQ(
         load_error(scene("<shape type=\"cube\">\n  <bsdf type=\"hair\"/>\n</shape>")),

@@ -1,5 +1,7 @@
 // Helpers shared by the XML parser and XML error tests.
 #pragma once
+#include "core/error.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,6 +14,22 @@ namespace penumbra::test {
 // Wraps the body in a version 3 scene whose first body line is line 2.
 inline std::string scene(const std::string& body) {
     return "<scene version=\"3.0.0\">\n" + body + "\n</scene>\n";
+}
+
+// The message of the LoadError thrown by `fn`, checked to be one line starting with its location (fails the
+// test if nothing or something else is thrown).
+template <typename Fn> std::string load_error_of(Fn&& fn) {
+    try {
+        fn();
+    } catch (const LoadError& e) {
+        const std::string msg = e.what();
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << "multi-line error: " << msg;
+        EXPECT_EQ(msg.rfind(e.location.str() + ": ", 0), 0u)
+            << "message does not start with its location: " << msg;
+        return msg;
+    }
+    ADD_FAILURE() << "no LoadError thrown";
+    return {};
 }
 
 // A scratch directory named after the running test, emptied on creation and removed on destruction.

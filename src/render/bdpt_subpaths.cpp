@@ -256,10 +256,8 @@ std::pair<float, float> connection_free_flight(BDPTContext& ctx, const PathVerte
         pieces.push_back({medium, ray.o, ray.d, end});
         if (!hit.is_valid() || !crosses(hit)) break;
         medium = target_medium(*hit.shape, hit.n, ray.d, medium);
-        Ray next = hit.spawn_ray(ray.d);
-        next.tmax = ray.tmax - hit.t - dot(next.o - hit.p, ray.d);
-        if (!(next.tmax > 0.f)) break;
-        ray = next;
+        ray = ray_beyond(ray, hit);
+        if (!(ray.tmax > 0.f)) break;
     }
     return segment_free_flight(pieces, a.type == VertexType::Medium, b.type == VertexType::Medium);
 }

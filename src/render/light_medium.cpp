@@ -26,10 +26,8 @@ const Medium* medium_at(const Scene& scene, const Vec3f& x, RayCounter& rays) {
         const SurfaceInteraction3f si = scene.intersect(ray);
         if (!si.is_valid()) break;
         medium = target_medium(*si.shape, si.n, ray.d, medium);
-        Ray next = si.spawn_ray(ray.d);
-        next.tmax = ray.tmax - si.t - dot(next.o - si.p, ray.d);
-        if (!(next.tmax > 0.f)) break;
-        ray = next;
+        ray = ray_beyond(ray, si);
+        if (!(ray.tmax > 0.f)) break;
     }
     return medium;
 }

@@ -4,6 +4,12 @@
 
 namespace penumbra {
 
+Ray ray_beyond(const Ray& ray, const SurfaceInteraction3f& si) {
+    Ray next = si.spawn_ray(ray.d);
+    next.tmax = ray.tmax - si.t - dot(next.o - si.p, ray.d);
+    return next;
+}
+
 Color3f segment_transmittance(const Scene& scene, Ray ray, const Medium* medium, Sampler& sampler,
                               RayCounter& rays) {
     Color3f tr(1.f);
@@ -20,10 +26,8 @@ Color3f segment_transmittance(const Scene& scene, Ray ray, const Medium* medium,
         const BSDF* bsdf = si.bsdf();
         if (!bsdf || bsdf->flags() != BSDFNull) return Color3f(0.f);
         medium = target_medium(*si.shape, si.n, ray.d, medium);
-        Ray next = si.spawn_ray(ray.d);
-        next.tmax = ray.tmax - si.t - dot(next.o - si.p, ray.d);
-        if (!(next.tmax > 0.f)) return tr;
-        ray = next;
+        ray = ray_beyond(ray, si);
+        if (!(ray.tmax > 0.f)) return tr;
     }
     return Color3f(0.f);
 }

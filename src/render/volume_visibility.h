@@ -14,6 +14,10 @@ namespace penumbra {
 Color3f segment_transmittance(const Scene& scene, Ray ray, const Medium* medium, Sampler& sampler,
                               RayCounter& rays);
 
+// The rest of `ray` beyond its surface hit `si`: offset off the surface, tmax shortened by the distance
+// covered (not positive when nothing is left).
+Ray ray_beyond(const Ray& ray, const SurfaceInteraction3f& si);
+
 // The medium a sensor's rays start in.
 inline const Medium* sensor_medium(const Scene& scene) { return scene.sensor->medium.get(); }
 
