@@ -34,6 +34,7 @@ public:
         p.dims = shape;
         p.index = index;
         p.geometry = geometry;
+        p.owner = owner_;
         p.shape = dynamic_cast<Shape*>(owner_);
         out_.push_back(std::move(p));
     }
@@ -289,7 +290,10 @@ void Parameters::displace(Scene& scene, double t) {
     // 1. Remember the reference configuration of everything that will move, and restore it.
     std::set<Shape*> moved;
     for (const auto& [p, index] : enabled_) {
-        if (p->kind == Parameter::Kind::Data) saved_data_.try_emplace(p->data, p->data, p->data + p->size);
+        if (p->kind == Parameter::Kind::Data) {
+            saved_data_.try_emplace(p->data, p->data, p->data + p->size);
+            data_owners_.try_emplace(p->data, p->owner);
+        }
         for (Shape* shape : moved_shapes(*p, scene))
             moved.insert(shape);
     }
@@ -305,6 +309,8 @@ void Parameters::displace(Scene& scene, double t) {
             for (int k = 0; k < p->size; ++k) p->data[k] += float(t * direction_[index + k]);
             recompute_moved_normals(*p);
         }
+    for (const auto& [data, owner] : data_owners_)
+        if (owner) owner->parameters_changed();
     update_moved(moved);
     // 3. Motions, exactly (finite θ = t), on top.
     const float theta = float(t);
@@ -355,6 +361,7 @@ void Parameters::set_direction(const std::vector<float>& direction) {
 
 void Parameters::rebase(const Scene& scene) {
     saved_data_.clear();
+    data_owners_.clear();
     saved_meshes_.clear();
     saved_emitters_.clear();
     saved_sensor_ = scene.sensor->to_world;
@@ -377,6 +384,7 @@ void Parameters::set_values(Scene& scene, const std::vector<float>& values, bool
             if (!std::isfinite(values[index + k])) throw Error("set_values: non-finite value for '" + p->name + "'");
         std::copy(values.begin() + index, values.begin() + index + p->size, p->data);
         recompute_moved_normals(*p);
+        if (p->owner) p->owner->parameters_changed();
         for (Shape* shape : moved_shapes(*p, scene))
             moved.insert(shape);
     }
@@ -384,6 +392,7 @@ void Parameters::set_values(Scene& scene, const std::vector<float>& values, bool
     for (Shape* shape : moved) shape->finalize();
     if (!moved.empty() && rebuild) scene.build();
     saved_data_.clear(); // the new values are the reference configuration from now on
+    data_owners_.clear();
     saved_meshes_.clear();
 }
 

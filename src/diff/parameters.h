@@ -36,6 +36,7 @@ struct Parameter {
     int size = 1;           // number of scalars
     std::vector<int> dims;  // Data: the array's shape ({H, W, 3} images, {N, 3} vertex positions, {3}, {1})
     int* index = nullptr;   // Data: where the object reads its parameter index (core/param.h)
+    Object* owner = nullptr; // Data: the object that listed it (told by parameters_changed() when written)
     bool geometry = false;  // changing it moves geometry (the BVH must be rebuilt)
     Shape* shape = nullptr; // motions of shapes, and vertex_positions
     std::vector<Shape*> shapes; // motions of an instance of a group with several shapes: its flattened copies
@@ -113,6 +114,7 @@ public:
     std::map<const Emitter*, std::vector<Motion>> emitter_motions_;
     // Reference values of everything displace() may change.
     std::map<float*, std::vector<float>> saved_data_;
+    std::map<float*, Object*> data_owners_; // owners of the values in saved_data_
     std::map<Shape*, std::pair<std::vector<Vec3f>, std::vector<Vec3f>>> saved_meshes_;
     Transform saved_sensor_;
     std::map<Emitter*, Transform> saved_emitters_;
