@@ -134,6 +134,9 @@ void cmd_params(const Common& c) {
                            : p.sensor || p.emitter                ? "motion (direction: world axis; radians)"
                            : p.kind == Parameter::Kind::Rotate
                                ? "motion (direction: world axis; radians; NAME@cx,cy,cz: about that center)"
+                           : p.kind == Parameter::Kind::Deform
+                               ? "motion (x + θ d exp(-|x-c|²/2r²), r = bbox diagonal / 4; direction: world "
+                                 "vector d; NAME@cx,cy,cz: c)"
                                : "motion (uniform scale; NAME@cx,cy,cz: about that center)";
         std::printf("%-48s %10d  %s\n", p.name.c_str(), p.size, kind);
     }
