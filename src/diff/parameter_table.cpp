@@ -153,8 +153,12 @@ void ParameterTable::set(int entry, const float* values, size_t count) {
     for (size_t k = 0; k < count; ++k)
         if (!std::isfinite(values[k]))
             throw Error("parameter '" + e.name + "': value " + std::to_string(k) + " is not finite");
-    if (items_[size_t(entry)].param->kind == Kind::Deform)
-        throw Error("parameter '" + e.name + "': deformations are not in the parameter table (select them with --param)");
+    // A deformation stays at its reference (0): writing the listed values back is harmless.
+    if (items_[size_t(entry)].param->kind == Kind::Deform) {
+        if (values[0] == 0.f) return;
+        throw Error("parameter '" + e.name +
+                    "': deformations cannot be set in the parameter table, only differentiated (--param)");
+    }
     if (items_[size_t(entry)].param->kind == Kind::Scale && !(values[0] > -1.f))
         throw Error("parameter '" + e.name +
                     "': the scale factor 1 + s must be positive, got s = " + std::to_string(values[0]));
@@ -288,7 +292,7 @@ void ParameterTable::enable(const std::vector<std::pair<int, std::vector<float>>
     for (const auto& [entry, direction] : directions) {
         if (this->entry(entry).motion && items_[size_t(entry)].param->kind == Kind::Deform)
             throw Error("parameter '" + entries_[size_t(entry)].name +
-                        "': deformations are not in the parameter table (select them with --param)");
+                        "': deformations cannot be selected in the parameter table (use --param)");
         entries.push_back(entry);
     }
     check(pose_values(), deformed_, entries);

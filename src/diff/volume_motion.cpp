@@ -8,7 +8,6 @@
 
 #include <algorithm>
 #include <map>
-#include <set>
 
 namespace penumbra {
 
@@ -67,11 +66,13 @@ bool closed(const TetMesh& welded, const std::vector<uint32_t>& indices) {
 
 // The unique edges of a tet mesh as adjacency lists (CSR).
 void tet_graph(const TetMesh& mesh, std::vector<uint32_t>& start, std::vector<uint32_t>& neighbors) {
-    std::set<std::pair<uint32_t, uint32_t>> edges;
+    std::vector<std::pair<uint32_t, uint32_t>> edges;
     for (const auto& t : mesh.tets)
         for (int i = 0; i < 4; ++i)
             for (int j = 0; j < 4; ++j)
-                if (i != j) edges.emplace(t[i], t[j]);
+                if (i != j) edges.emplace_back(t[i], t[j]);
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
     start.assign(mesh.vertices.size() + 1, 0);
     for (const auto& [a, b] : edges)
         ++start[a + 1];
@@ -110,6 +111,8 @@ struct VolumeRegion {
         std::vector<bool> fixed(n, false);
         for (size_t i = 0; i < n; ++i)
             fixed[i] = i < mesh.surface_vertex_count;
+        for (const TetMesh::SurfacePoint& s : mesh.surface_points)
+            fixed[s.vertex] = true;
         std::vector<uint32_t> start, nb;
         tet_graph(mesh, start, nb);
         velocity.assign(n * k_count, Vec3f(0.f));
@@ -117,6 +120,11 @@ struct VolumeRegion {
             for (size_t k = 0; k < k_count; ++k)
                 if (shape_vertex[i] >= 0 || (!harmonic && !fixed[i]))
                     velocity[i * k_count + k] = MovedVertices::velocity((*motions)[k], mesh.vertices[i]);
+        // Steiner points on the surface move as the surface does there: linearly on its triangle.
+        for (const TetMesh::SurfacePoint& s : mesh.surface_points)
+            for (size_t k = 0; k < k_count; ++k)
+                for (int j = 0; j < 3; ++j)
+                    velocity[s.vertex * k_count + k] += velocity[s.triangle[j] * k_count + k] * s.bary[j];
         // Harmonic extension by Gauss-Seidel sweeps of the graph Laplacian (uniform weights): any values at
         // the Steiner points give a continuous X fixed on the boundaries; smooth ones keep J near 1.
         if (harmonic && k_count > 0)
@@ -156,6 +164,10 @@ struct VolumeRegion {
         std::vector<std::vector<std::pair<uint32_t, float>>> w(n);
         for (size_t i = 0; i < n; ++i)
             if (shape_vertex[i] >= 0) w[i] = {{uint32_t(shape_vertex[i]), 1.f}};
+        for (const TetMesh::SurfacePoint& s : mesh.surface_points)
+            for (int j = 0; j < 3; ++j)
+                if (shape_vertex[s.triangle[j]] >= 0)
+                    w[s.vertex].emplace_back(uint32_t(shape_vertex[s.triangle[j]]), s.bary[j]);
         for (int sweep = 0; sweep < 8; ++sweep)
             for (size_t i = 0; i < n; ++i) {
                 if (fixed[i] || start[i] == start[i + 1]) continue;
