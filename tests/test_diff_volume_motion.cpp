@@ -7,6 +7,7 @@
 #include "diff/material_form.h"
 #include "diff/parameters.h"
 #include "diff/volume_motion.h"
+#include "mesh_test_util.h"
 #include "scene/mesh.h"
 #include "scene/scene.h"
 #include "scene/tet_mesh.h"
@@ -81,9 +82,10 @@ struct BlobScene {
     const Shape* blob = nullptr;
     const Medium* fog = nullptr;
 
-    BlobScene(bool fog_inside, const std::string& param, const Vec3f& center = Vec3f(0.f)) {
+    BlobScene(bool fog_inside, const std::string& param, const Vec3f& center = Vec3f(0.f),
+              const TriangleMesh& mesh = make_sphere_mesh(Vec3f(0.f), 0.5f, 8, 16)) {
         const std::string obj = dir.str() + "/blob.obj";
-        write_obj(obj, make_sphere_mesh(Vec3f(0.f), 0.5f, 8, 16));
+        write_obj(obj, mesh);
         scene = load_scene_string(scene_xml(obj, fog_inside, center), dir.str());
         params = std::make_unique<Parameters>(*scene);
         params->enable({parse_param_selection(param)});
@@ -209,7 +211,26 @@ INSTANTIATE_TEST_SUITE_P(Motions, InteriorAndShell,
                          ::testing::Combine(::testing::Bool(),
                                             ::testing::Values("blob.translate=0.3,1,0", "blob.rotate=1,1,0",
                                                               "blob.scale", "blob.deform=0,1,0.5",
-                                                              "blob.deform@0.3,0.2,0=1,0,0")));
+                                                              "blob.deform@0.3,0.2,0=1,0,0",
+                                                              "blob.vertex_positions=0.2,1,0")));
+
+// An open mesh (a thin sheet, like a leaf) moves the medium around it on both sides; it has no interior.
+TEST(VolumeMotion, SheetInAMedium) {
+    TriangleMesh sheet = make_rectangle_mesh();
+    for (Vec3f& p : sheet.positions)
+        p = Vec3f(0.5f * p.x, 0.1f * p.x + 0.2f * p.y, 0.4f * p.y);
+    for (const char* param : {"blob.rotate=0,0,1", "blob.deform=0,1,0"}) {
+        BlobScene s(false, param, Vec3f(0.f), sheet);
+        const VolumeMotion motion(*s.scene, *s.params);
+        expect_follows_surface(s, motion, s.fog);
+        EXPECT_EQ(norm(tangent(motion.position(Vec3f(0.f, 1.3f, 0.f), s.fog, nullptr), *s.params)), 0.0);
+    }
+    const std::string error = error_of([&] {
+        BlobScene s(true, "blob.deform", Vec3f(0.f), sheet);
+        VolumeMotion m(*s.scene, *s.params);
+    });
+    EXPECT_NE(error.find("shape 'blob' is not closed"), std::string::npos) << error;
+}
 
 // J = dV(x)/dV(p): scaling by 1 + θ multiplies volumes by (1 + θ)³, so dJ/dθ = 3; a deformation's dJ/dθ is
 // the divergence of its field, d · ∇φ, up to the piecewise-linear interpolation's error on the tets.

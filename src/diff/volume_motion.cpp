@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <map>
+#include <tuple>
 
 namespace penumbra {
 
@@ -50,12 +51,18 @@ bool triangle_overlaps_box(const Vec3f& a, const Vec3f& b, const Vec3f& c, const
 }
 
 // Whether every edge of the mesh is shared by exactly two triangles (after welding coincident vertices).
-bool closed(const TetMesh& welded, const std::vector<uint32_t>& indices) {
+bool closed(const TriangleMesh& mesh) {
+    std::map<std::tuple<float, float, float>, uint32_t> welded;
+    std::vector<uint32_t> vertex(mesh.positions.size());
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+        const Vec3f& p = mesh.positions[i];
+        vertex[i] = welded.try_emplace({p.x, p.y, p.z}, uint32_t(welded.size())).first->second;
+    }
+    const std::vector<uint32_t>& indices = mesh.indices;
     std::map<std::pair<uint32_t, uint32_t>, int> edges;
     for (size_t t = 0; t + 2 < indices.size(); t += 3)
         for (int k = 0; k < 3; ++k) {
-            uint32_t a = welded.input_vertex[indices[t + k]],
-                     b = welded.input_vertex[indices[t + (k + 1) % 3]];
+            uint32_t a = vertex[indices[t + k]], b = vertex[indices[t + (k + 1) % 3]];
             if (a == b) continue;
             ++edges[{std::min(a, b), std::max(a, b)}];
         }
@@ -104,13 +111,14 @@ struct VolumeRegion {
     size_t K() const { return motions->size(); }
 
     // Fills velocity (a field evaluated at every vertex, or harmonic away from the fixed ones), the
-    // divergences and the vertex_positions weights. `fixed[i]`: i lies on the shape (value given) or on the
-    // box (zero); `shape_vertex[i]`: the shape's vertex at tet vertex i, or -1.
-    void interpolate(const std::vector<int64_t>& shape_vertex, bool harmonic) {
+    // divergences and the vertex_positions weights. The first `fixed_inputs` input vertices are fixed: the
+    // shape's (their motion) and the box's corners (zero); the Steiner points on the surface too (the
+    // surface's motion there); `shape_vertex[i]`: the shape's vertex at tet vertex i, or -1.
+    void interpolate(const std::vector<int64_t>& shape_vertex, size_t fixed_inputs, bool harmonic) {
         const size_t n = mesh.vertices.size(), k_count = K();
         std::vector<bool> fixed(n, false);
-        for (size_t i = 0; i < n; ++i)
-            fixed[i] = i < mesh.surface_vertex_count;
+        for (size_t i = 0; i < fixed_inputs; ++i)
+            fixed[mesh.input_vertex[i]] = true;
         for (const TetMesh::SurfacePoint& s : mesh.surface_points)
             fixed[s.vertex] = true;
         std::vector<uint32_t> start, nb;
@@ -155,8 +163,8 @@ struct VolumeRegion {
     }
 
     // The vertex_positions weights: 1 at the shape's vertices, 0 at the box, and a few Jacobi-style sweeps
-    // (the 8 largest weights kept) at the Steiner points; in the interior they sum to 1 (translating every
-    // vertex translates the medium).
+    // (the 4 largest weights kept: a few tape nodes per point) at the Steiner points; in the interior they
+    // sum to 1 (translating every vertex translates the medium).
     void interpolate_weights(const std::vector<int64_t>& shape_vertex, const std::vector<bool>& fixed,
                              const std::vector<uint32_t>& start, const std::vector<uint32_t>& nb,
                              bool normalize) {
@@ -178,7 +186,7 @@ struct VolumeRegion {
                 std::vector<std::pair<uint32_t, float>> kept(sum.begin(), sum.end());
                 std::stable_sort(kept.begin(), kept.end(),
                                  [](const auto& a, const auto& b) { return a.second > b.second; });
-                if (kept.size() > 8) kept.resize(8);
+                if (kept.size() > 4) kept.resize(4);
                 float total = 0.f;
                 for (const auto& [s, weight] : kept)
                     total += weight;
@@ -198,7 +206,11 @@ struct VolumeRegion {
 
     // Adds this region's displacement X(p, θ) - p and J - 1 at p (nothing when p lies outside it).
     void add(const Vec3f& p, Vec3<Var>& x, Var* jacobian) const {
-        if (p.x < lo.x || p.y < lo.y || p.z < lo.z || p.x > hi.x || p.y > hi.y || p.z > hi.z) return;
+        // A little slack: points on the shape's surface at its bounding box, up to rounding.
+        const Vec3f slack = (hi - lo) * 1e-4f;
+        if (p.x < lo.x - slack.x || p.y < lo.y - slack.y || p.z < lo.z - slack.z || p.x > hi.x + slack.x ||
+            p.y > hi.y + slack.y || p.z > hi.z + slack.z)
+            return;
         if (!locator) { // affine: the motions' own (first-order) maps, J = det of their linear part
             for (const Motion& m : *motions) {
                 const Var theta = Var::parameter(0.f, m.index);
@@ -223,12 +235,16 @@ struct VolumeRegion {
         }
         if (!vertex_positions) return;
         const auto grad = locator->barycentric_gradients(at->tet);
-        std::map<uint32_t, std::pair<float, Vec3f>> terms; // s -> (weight at p, its gradient)
+        // s -> (weight at p, its gradient), at most 16 terms.
+        std::vector<std::pair<uint32_t, std::pair<float, Vec3f>>> terms;
         for (int j = 0; j < 4; ++j)
             for (uint32_t e = weight_start[tet[j]]; e < weight_start[tet[j] + 1]; ++e) {
-                auto& [c, g] = terms[weights[e].first];
-                c += at->bary[j] * weights[e].second;
-                g += grad[j] * weights[e].second;
+                const uint32_t s = weights[e].first;
+                auto it =
+                    std::find_if(terms.begin(), terms.end(), [&](const auto& t) { return t.first == s; });
+                if (it == terms.end()) it = terms.insert(terms.end(), {s, {0.f, Vec3f(0.f)}});
+                it->second.first += at->bary[j] * weights[e].second;
+                it->second.second += grad[j] * weights[e].second;
             }
         const MovedVertices leaves{*shape, no_motions};
         for (const auto& [s, term] : terms) {
@@ -282,15 +298,16 @@ std::unique_ptr<VolumeRegion> interior_region(const Scene& scene, const Shape& s
     bounds(shape, r->lo, r->hi);
     if (!r->vertex_positions && std::all_of(r->motions->begin(), r->motions->end(), affine)) return r;
     const std::string name = shape_label(scene, shape);
+    if (!closed(shape.mesh))
+        throw Error(name + " is not closed: its interior medium cannot be deformed with it");
     // Tets small enough (about 16³ per bounding box) that the interpolated field follows a smooth
     // deformation inside.
     const Vec3f extent = r->hi - r->lo;
     r->mesh = tetrahedralize(shape.mesh.positions, shape.mesh.indices, name,
                              double(extent.x) * extent.y * extent.z / 4096.0);
-    if (!closed(r->mesh, shape.mesh.indices))
-        throw Error(name + " is not closed: its interior medium cannot be deformed with it");
     r->locator = std::make_unique<TetLocator>(r->mesh);
-    r->interpolate(shape_vertices_of(r->mesh, shape.mesh.positions.size()), false);
+    r->interpolate(shape_vertices_of(r->mesh, shape.mesh.positions.size()), shape.mesh.positions.size(),
+                   false);
     return r;
 }
 
@@ -339,9 +356,21 @@ std::unique_ptr<VolumeRegion> shell_region(const Scene& scene, const Shape& shap
     for (const auto& f : faces)
         for (const uint32_t c : {f[0], f[1], f[2], f[0], f[2], f[3]})
             indices.push_back(base + c);
+    // A lattice of free points between the shape's bounding box and the box (6 steps across), so that the
+    // shell's tets are not long slivers from the surface to the box's corners.
+    Vec3f slo, shi;
+    bounds(shape, slo, shi);
+    const Vec3f step = (r->hi - r->lo) / 6.f;
+    for (int z = 1; z < 6; ++z)
+        for (int y = 1; y < 6; ++y)
+            for (int x = 1; x < 6; ++x) {
+                const Vec3f p = r->lo + step * Vec3f(float(x), float(y), float(z));
+                const Vec3f gap = max(slo - p, p - shi) / step;
+                if (std::max({gap.x, gap.y, gap.z}) > 0.5f) positions.push_back(p);
+            }
     r->mesh = tetrahedralize(positions, indices, "the medium around " + shape_label(scene, shape));
     r->locator = std::make_unique<TetLocator>(r->mesh);
-    r->interpolate(shape_vertices_of(r->mesh, shape.mesh.positions.size()), true);
+    r->interpolate(shape_vertices_of(r->mesh, shape.mesh.positions.size()), base + 8, true);
     return r;
 }
 
