@@ -289,6 +289,14 @@ TEST(VolumeMotion, ShellThatCannotFitIsAnError) {
     }
 }
 
+// Moving a medium's container with shapes inside: refused (they bound the medium but would not move).
+TEST(VolumeMotion, ContainerWithContentsIsAnError) {
+    BlobScene s(false, "box.translate");
+    const std::string error = error_of([&] { VolumeMotion m(*s.scene, *s.params); });
+    EXPECT_NE(error.find("shape 'box' moves its interior medium, which holds shape '"), std::string::npos)
+        << error;
+}
+
 // displace() moves the mesh exactly (x + θ d φ(x)); its central differences match the tape's derivative of
 // positions and (normalized) normals.
 TEST(DeformMotion, DisplaceMatchesTheTape) {

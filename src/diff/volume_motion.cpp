@@ -296,8 +296,20 @@ std::unique_ptr<VolumeRegion> interior_region(const Scene& scene, const Shape& s
     r->motions = &params.motions(&shape);
     r->vertex_positions = shape.vertex_index() >= 0;
     bounds(shape, r->lo, r->hi);
-    if (!r->vertex_positions && std::all_of(r->motions->begin(), r->motions->end(), affine)) return r;
     const std::string name = shape_label(scene, shape);
+    // The medium moves with the shape as a whole: a shape inside it would see its boundary move.
+    for (const auto& other : scene.shapes) {
+        if (other.get() == &shape || other->mesh.positions.empty()) continue;
+        Vec3f lo, hi;
+        bounds(*other, lo, hi);
+        if (lo.x >= r->lo.x && lo.y >= r->lo.y && lo.z >= r->lo.z && hi.x <= r->hi.x && hi.y <= r->hi.y &&
+            hi.z <= r->hi.z && medium_around(scene, *other) == shape.interior.get())
+            throw Error(
+                name + " moves its interior medium, which holds " + shape_label(scene, *other) +
+                ": moving a medium's container with shapes inside it is not supported (move the shapes "
+                "inside instead)");
+    }
+    if (!r->vertex_positions && std::all_of(r->motions->begin(), r->motions->end(), affine)) return r;
     if (!closed(shape.mesh))
         throw Error(name + " is not closed: its interior medium cannot be deformed with it");
     // Tets small enough (about 16³ per bounding box) that the interpolated field follows a smooth
