@@ -284,7 +284,8 @@ TEST(VolumeMotion, ShellThatCannotFitIsAnError) {
         VolumeMotion motion(*s.scene, *s.params);
         FAIL() << "no error";
     } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("shape 'blob' touches another shape"), std::string::npos)
+        EXPECT_NE(std::string(e.what()).find("shape 'blob' touches another shape (shape 'floor')"),
+                  std::string::npos)
             << e.what();
     }
 }

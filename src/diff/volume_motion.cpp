@@ -323,31 +323,57 @@ std::unique_ptr<VolumeRegion> interior_region(const Scene& scene, const Shape& s
     return r;
 }
 
-// The largest box around the shape (up to twice its bounding box, and at least a small margin) that meets no
-// other shape's triangles.
+// A box around the shape, as large as twice its bounding box, that meets no other shape's triangles: a face
+// of the box stops halfway to a triangle beyond it; a triangle beside the shape on no side (diagonally)
+// shrinks every face. Faces closer than a thousandth of the shape's size mean that the shape touches another.
 void shell_box(const Scene& scene, const Shape& shape, Vec3f& lo, Vec3f& hi) {
     Vec3f slo, shi;
     bounds(shape, slo, shi);
     const Vec3f extent = shi - slo;
-    const float diagonal = norm(extent);
-    const float largest = std::max({extent.x, extent.y, extent.z});
-    for (float margin = 0.5f * largest; margin >= 0.02f * diagonal; margin *= 0.7f) {
-        lo = slo - Vec3f(margin);
-        hi = shi + Vec3f(margin);
+    const float smallest = 1e-3f * norm(extent);
+    Vec3f below(0.5f * std::max({extent.x, extent.y, extent.z})), above = below; // the margins
+    const Shape* obstacle = nullptr;
+    for (int round = 0; round < 64; ++round) {
+        lo = slo - below;
+        hi = shi + above;
         const Vec3f center = (lo + hi) * 0.5f, half = (hi - lo) * 0.5f;
         bool free = true;
         for (const auto& other : scene.shapes) {
-            if (other.get() == &shape || !free) continue;
+            if (other.get() == &shape) continue;
             const auto& m = other->mesh;
-            for (size_t t = 0; free && t + 2 < m.indices.size(); t += 3)
-                free = !triangle_overlaps_box(m.positions[m.indices[t]], m.positions[m.indices[t + 1]],
-                                              m.positions[m.indices[t + 2]], center, half);
+            for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
+                const Vec3f a = m.positions[m.indices[t]], b = m.positions[m.indices[t + 1]],
+                            c = m.positions[m.indices[t + 2]];
+                if (!triangle_overlaps_box(a, b, c, center, half)) continue;
+                free = false;
+                obstacle = other.get();
+                // The side with the widest gap between the triangle and the shape's bounding box.
+                const Vec3f tlo = min(a, min(b, c)), thi = max(a, max(b, c));
+                int axis = -1;
+                bool upper = false;
+                float gap = 0.f;
+                for (int k = 0; k < 3; ++k) {
+                    if (tlo[k] - shi[k] > gap) gap = tlo[k] - shi[k], axis = k, upper = true;
+                    if (slo[k] - thi[k] > gap) gap = slo[k] - thi[k], axis = k, upper = false;
+                }
+                if (axis < 0) {
+                    below *= 0.7f;
+                    above *= 0.7f;
+                } else {
+                    float& margin = upper ? above[axis] : below[axis];
+                    margin = std::min(margin, 0.5f * gap);
+                }
+                break;
+            }
+            if (!free) break;
         }
         if (free) return;
+        if (std::min({below.x, below.y, below.z, above.x, above.y, above.z}) < smallest) break;
     }
-    throw Error(shape_label(scene, shape) +
-                " touches another shape: no box around it is free of other shapes, so the medium around it "
-                "cannot be moved with it (leave a gap between the moving shape and its neighbors)");
+    throw Error(
+        shape_label(scene, shape) + " touches another shape (" + shape_label(scene, *obstacle) +
+        "): no box around it is free of other shapes, so the medium around it cannot be moved with it "
+        "(leave a gap between the moving shape and its neighbors)");
 }
 
 std::unique_ptr<VolumeRegion> shell_region(const Scene& scene, const Shape& shape, const Parameters& params) {
