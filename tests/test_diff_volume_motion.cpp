@@ -300,8 +300,12 @@ TEST(VolumeMotion, ContainerWithContentsIsAnError) {
 
 // displace() moves the mesh exactly (x + θ d φ(x)); its central differences match the tape's derivative of
 // positions and (normalized) normals.
+// Two selections are two control variables, both moved by the direction (1, 1).
 TEST(DeformMotion, DisplaceMatchesTheTape) {
     BlobScene s(false, "blob.deform@0.1,0.2,0=0.3,1,-0.2");
+    s.params->enable({parse_param_selection("blob.deform@0.1,0.2,0=0.3,1,-0.2"),
+                      parse_param_selection("blob.deform@-0.3,0,0.2=1,0,0")});
+    ASSERT_EQ(s.params->dimension(), 2);
     Shape& blob = const_cast<Shape&>(*s.blob);
     ASSERT_FALSE(blob.mesh.normals.empty());
     const MovedVertices moved{blob, s.params->motions(&blob)};
