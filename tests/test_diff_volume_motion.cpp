@@ -288,6 +288,14 @@ TEST(VolumeMotion, ShellThatCannotFitIsAnError) {
                   std::string::npos)
             << e.what();
     }
+    // Every vertex_positions enabled (reverse mode): reported, not fatal.
+    s.params->enable_all_data();
+    const VolumeMotion all(*s.scene, *s.params);
+    std::string omitted;
+    for (const std::string& why : all.omitted())
+        omitted += why + "\n";
+    EXPECT_NE(omitted.find("shape 'blob' touches another shape"), std::string::npos) << omitted;
+    EXPECT_NE(omitted.find("shape 'box' moves its interior medium"), std::string::npos) << omitted;
 }
 
 // Moving a medium's container with shapes inside: refused (they bound the medium but would not move).

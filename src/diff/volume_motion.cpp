@@ -257,6 +257,7 @@ struct VolumeRegion {
 
 struct VolumeMotion::Impl {
     std::map<const Medium*, std::vector<std::unique_ptr<VolumeRegion>>> regions;
+    std::vector<std::string> omitted;
 };
 
 namespace {
@@ -418,17 +419,26 @@ VolumeMotion::VolumeMotion(const Scene& scene, const Parameters& params) : impl_
     if (!scene_has_media(scene)) return;
     for (const auto& shape : scene.shapes) {
         if (!params.moves(*shape) || shape->mesh.indices.empty()) continue;
-        const Medium* around = medium_around(scene, *shape);
-        // The same medium on both sides: the shell's tets fill the shape too.
-        if (shape->interior && shape->interior.get() != around)
-            impl_->regions[shape->interior.get()].push_back(interior_region(scene, *shape, params));
-        if (around) impl_->regions[around].push_back(shell_region(scene, *shape, params));
+        try {
+            const Medium* around = medium_around(scene, *shape);
+            // The same medium on both sides: the shell's tets fill the shape too.
+            if (shape->interior && shape->interior.get() != around)
+                impl_->regions[shape->interior.get()].push_back(interior_region(scene, *shape, params));
+            if (around) impl_->regions[around].push_back(shell_region(scene, *shape, params));
+        } catch (const Error& e) {
+            // Reverse mode enables every vertex_positions: a shape that cannot carry its media is reported,
+            // not fatal; a selected motion is.
+            if (!params.motions(shape.get()).empty()) throw;
+            impl_->omitted.push_back(e.what());
+        }
     }
 }
 
 VolumeMotion::~VolumeMotion() = default;
 
 bool VolumeMotion::identity() const { return impl_->regions.empty(); }
+
+const std::vector<std::string>& VolumeMotion::omitted() const { return impl_->omitted; }
 
 Vec3<Var> VolumeMotion::position(const Vec3f& p, const Medium* medium, Var* jacobian) const {
     Vec3<Var> x(p);

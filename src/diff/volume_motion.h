@@ -20,6 +20,8 @@
 #include "core/vector.h"
 
 #include <memory>
+#include <string>
+#include <vector>
 
 namespace penumbra {
 
@@ -36,6 +38,9 @@ class VolumeMotion {
 
     // Whether X is the identity in every medium.
     bool identity() const;
+    // Why X does not follow some shapes moved only by their vertex_positions (reverse mode enables them all):
+    // the errors that a selected motion of those shapes would throw. Their media's derivatives are missing.
+    const std::vector<std::string>& omitted() const;
     // x = X(p, θ) on the thread's tape (first order at θ0) for a point p of `medium` in the reference
     // configuration; *jacobian (if not null) receives J = dV(x)/dV(p).
     Vec3<Var> position(const Vec3f& p, const Medium* medium, Var* jacobian) const;
