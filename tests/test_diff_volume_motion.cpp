@@ -338,3 +338,27 @@ TEST(DeformMotion, DisplaceMatchesTheTape) {
     const std::string listed = s.params->find("blob.deform").name;
     EXPECT_EQ(listed, "blob.deform");
 }
+
+// An instance's deform moves all its flattened shapes by one world-space field (center and radius from their
+// common bounding box).
+TEST(DeformMotion, InstanceDeformsAllItsShapes) {
+    auto scene = load_scene_string(test::scene(R"(
+    <shape type="shapegroup" id="pair">
+        <shape type="rectangle" id="a"/>
+        <shape type="rectangle"><transform name="to_world"><translate x="4"/></transform></shape>
+    </shape>
+    <shape type="instance" id="two"><ref id="pair"/><transform name="to_world"><translate y="1"/></transform></shape>)"));
+    Parameters params(*scene);
+    params.enable({parse_param_selection("two.deform=0,0,1")});
+    for (const auto& shape : scene->shapes) {
+        ASSERT_EQ(params.motions(shape.get()).size(), 1u);
+        EXPECT_EQ(params.motions(shape.get())[0].center, Vec3f(2.f, 1.f, 0.f));
+        EXPECT_FLOAT_EQ(params.motions(shape.get())[0].radius, 0.25f * std::sqrt(36.f + 4.f));
+    }
+    const Motion m = params.motions(scene->shapes[1].get())[0];
+    const Vec3f p = scene->shapes[1]->mesh.positions[1];
+    params.displace(*scene, 0.5);
+    EXPECT_NEAR(scene->shapes[1]->mesh.positions[1].z, 0.5f * deform_weight(m, p), 1e-6f);
+    params.displace(*scene, 0.0);
+    EXPECT_EQ(scene->shapes[1]->mesh.positions[1], p);
+}
