@@ -40,7 +40,7 @@ void add_common(CLI::App* cmd, Common& c, bool needs_params) {
     auto* p = cmd->add_option(
         "--param", c.params,
         "parameter to differentiate, optionally with a direction: NAME[=v1,v2,...] (repeatable); "
-        "shape rotate/scale motions take a center: NAME@cx,cy,cz[=...]");
+        "shape rotate/scale/deform motions take a center: NAME@cx,cy,cz[=...]");
     if (needs_params) p->required();
     cmd->add_option("-D", c.defines, "override a <default> value: name=value");
     cmd->add_option("--spp", c.spp, "samples per pixel (in total)")->check(CLI::PositiveNumber);
