@@ -362,3 +362,49 @@ TEST(DeformMotion, InstanceDeformsAllItsShapes) {
     params.displace(*scene, 0.0);
     EXPECT_EQ(scene->shapes[1]->mesh.positions[1], p);
 }
+
+// J is the Jacobian of X: dJ/dθ equals the divergence of dX/dθ (central differences of the tape's tangents,
+// at points whose stencil stays in one tet: nearly all of them, the rest crossing a face of the
+// piecewise-linear field), in the interior and in the shell.
+TEST(VolumeMotion, JacobianIsConsistentWithX) {
+    for (const auto& [fog_inside, param] :
+         {std::pair{true, "blob.deform=0.3,1,0"}, std::pair{true, "blob.vertex_positions"},
+          std::pair{false, "blob.translate=1,0.5,0"}, std::pair{false, "blob.deform=0,1,0"}}) {
+        BlobScene s(fog_inside, param);
+        // vertex_positions: a non-uniform direction (a uniform one translates: dJ/dθ = 0).
+        if (s.params->dimension() > 1) {
+            std::vector<float> direction(size_t(s.params->dimension()));
+            for (size_t i = 0; i < direction.size(); ++i)
+                direction[i] = std::sin(1.7f * float(i));
+            s.params->set_direction(direction);
+        }
+        const VolumeMotion motion(*s.scene, *s.params);
+        const Medium* medium = fog_inside ? s.blob->interior.get() : s.fog;
+        int consistent = 0, n = 0;
+        double largest = 0.0;
+        for (int i = 0; i < 60; ++i, ++n) {
+            Tape::current().clear();
+            const float a = 0.9f * float(i),
+                        r = fog_inside ? 0.05f + 0.006f * float(i) : 0.58f + 0.006f * float(i);
+            const Vec3f p(r * std::cos(a) * std::cos(0.3f * a), r * std::sin(a) * std::cos(0.3f * a),
+                          r * std::sin(0.3f * a));
+            Var j;
+            motion.position(p, medium, &j);
+            const double dj = tangent(j, *s.params);
+            largest = std::max(largest, std::abs(dj));
+            const float h = 1e-4f;
+            double div = 0.0;
+            for (int k = 0; k < 3; ++k) {
+                Vec3f e(0.f);
+                e[k] = h;
+                div += (tangent(motion.position(p + e, medium, nullptr), *s.params)[k] -
+                        tangent(motion.position(p - e, medium, nullptr), *s.params)[k]) /
+                       (2.0 * h);
+            }
+            consistent += std::abs(dj - div) < 2e-2 * std::max(1.0, std::abs(dj));
+        }
+        std::printf("  %s: %d of %d consistent (largest |dJ/dθ| %.3f)\n", param, consistent, n, largest);
+        EXPECT_GT(largest, 0.05);
+        EXPECT_GE(consistent, n * 9 / 10) << param << (fog_inside ? " (interior)" : " (shell)");
+    }
+}
