@@ -207,7 +207,10 @@ Gradient render_gradient(const Scene& scene, const Parameters& params, const Ima
     const bool media = scene_has_media(scene);
     const size_t dim = size_t(params.dimension());
     tbb::enumerable_thread_specific<std::vector<double>> gradients([dim] { return std::vector<double>(dim, 0.0); });
-    Gradient result{std::vector<double>(dim, 0.0), Image(film.width, film.height), 0.0, {}};
+    Gradient result{std::vector<double>(dim, 0.0), {}, Image(film.width, film.height), 0.0, {}};
+    for (const std::string& shape : form.volume_motion().omitted())
+        result.warnings.push_back("the medium around '" + shape + "' does not follow its vertex_positions (" +
+                                  "it touches another shape): their gradient misses the medium's motion");
     const float inv_spp = 1.f / float(options.spp);
     SharedSampleCost cost;
 

@@ -35,6 +35,7 @@ struct DerivativeImage {
 
 struct Gradient {
     std::vector<double> values; // dL/dθ, one per enabled parameter scalar
+    std::vector<std::string> warnings; // terms the estimate leaves out (shown to the user)
     Image primal;
     double seconds = 0;
     SampleCost cost;

@@ -69,6 +69,7 @@ class PsdrMethod final : public DerivativeMethod {
         const Gradient g = psdr_gradient(scene, params, adjoint, o);
         MethodGradient out;
         out.values = g.values;
+        out.warnings = g.warnings;
         out.primal = g.primal;
         out.description = describe(scene, params, o);
         out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
