@@ -16,9 +16,10 @@ namespace penumbra {
 // One boundary sample whose source endpoint is an emitter sample, with the detector subpath's camera
 // connections at depths t_min..t_max (diff/detector_subpath.h): the direct term uses t = 0 only, the
 // indirect term t ≥ 1.
-BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edges, const MaterialForm& form, int t_min,
-                                       int t_max, const PathSettings& settings, const BoundarySampleIndex& index,
-                                       Sampler& sampler, RayCounter& rays);
+// In media the segment leaves the light in the emitter's medium (render/light_medium.h).
+BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edges, const SegmentContext& context,
+                                       int t_min, int t_max, const PathSettings& settings,
+                                       const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays);
 
 class DirectBoundary final : public BoundaryTerm {
 public:

@@ -1,0 +1,29 @@
+// Radiance leaving a vertex of a boundary path through participating media: the source subpath of Algorithm 1
+// (paper 001 §5.2, line 16) from a surface or medium vertex x_S0, and the radiance seen on either side of a
+// silhouette behind which a medium continues (the primary term). Volumetric path tracing with next-event
+// estimation at every vertex (through media and null boundaries, render/volume_visibility.h semantics), free
+// flights between vertices (diff/media_walk.h) and phase or BSDF sampling. Emission reached by sampling is
+// not counted beyond the first vertex (next-event estimation alone carries it), which is unbiased for every
+// path whose vertices have smooth BSDFs or phase functions; paths that reach an area light through a chain of
+// delta lobes are left out.
+#pragma once
+#include "render/path_tracer.h"
+
+namespace penumbra {
+
+// A vertex: on a surface (si valid, si.wi toward the direction the radiance leaves in) or in `medium` at
+// si.p.
+struct RadianceVertex {
+    SurfaceInteraction3f si;
+    Vec3f to_viewer;                // world direction the radiance leaves in
+    const Medium* medium = nullptr; // a surface vertex: the medium on the viewer's side
+};
+
+// The radiance leaving `v` toward v.to_viewer; at a medium vertex the in-scattered radiance ∫ f_p L_i dω (σ_s
+// is the caller's, in the free flight's weight). `max_depth` counts scattering vertices as volpath does (a
+// path with k of them, v included, is counted if k < max_depth; -1: unbounded); `emission`: include a surface
+// vertex's own emission.
+Color3f vertex_radiance(const Scene& scene, const RadianceVertex& v, int max_depth, bool emission,
+                        const PathSettings& settings, Sampler& sampler, RayCounter& rays);
+
+} // namespace penumbra
