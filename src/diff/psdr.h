@@ -22,6 +22,8 @@ struct PsdrOptions {
     int indirect_spp = 4;     // indirect boundary samples per pixel and technique (per batch); 0 disables it
     int pixel_spp = 4;        // pixel-boundary samples per pixel (per batch; box or cut filters); 0: off
     bool guiding = true;      // contrast-guided sampling of the primary term's edges (always mixed with uniform)
+    bool volume_boundary = true; // boundary segments may end at medium vertices (false: surface endpoints only,
+                                 // the DTRT-like baseline that misses shadow sheets in media)
 };
 
 struct PsdrDerivative {
