@@ -24,10 +24,13 @@ namespace {
 
 // A floor under a black square occluder and a point light, inside a fog cube behind an index-matched (null)
 // boundary; the camera looks in from outside. `occluder_y`: the occluder's height (in view, or above it).
-std::unique_ptr<Scene> fog_scene(int res, float occluder_y, const std::string& light = "0.2, 3.2, 0") {
+std::unique_ptr<Scene> fog_scene(int res, float occluder_y, const std::string& light = "0.2, 3.2, 0",
+                                 int max_depth = 2) {
     const std::string xml =
         "<scene version=\"3.0.0\">"
-        "<integrator type=\"volpath\"><integer name=\"max_depth\" value=\"2\"/></integrator>"
+        "<integrator type=\"volpath\"><integer name=\"max_depth\" value=\"" +
+        std::to_string(max_depth) +
+        "\"/></integrator>"
         "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_t\" value=\"0.35\"/>"
         "<rgb name=\"albedo\" value=\"0.9, 0.8, 0.7\"/><phase type=\"hg\"><float name=\"g\" "
         "value=\"0.3\"/></phase>"
@@ -59,13 +62,13 @@ struct Estimate {
 
 // 16 batches of one boundary term (samples_per_pixel per batch), as psdr_derivative runs them.
 Estimate batches(const Scene&, const Parameters& params, const BoundaryTerm& term, int spp, bool volume,
-                 FirstVertex first_vertex = FirstVertex::Auto) {
+                 FirstVertex first_vertex = FirstVertex::Auto, int max_depth = 2) {
     ImageBatches b;
     for (int k = 0; k < 16; ++k) {
         BoundaryOptions o;
         o.samples_per_pixel = spp;
         o.seed = 17 + 0x9E3779B97F4A7C15ULL * uint64_t(k + 1);
-        o.path.max_depth = 2; // the scenes' volpath integrator's
+        o.path.max_depth = max_depth; // the scene's volpath integrator's
 
         o.first_vertex = first_vertex;
         o.volume_endpoints = volume;
@@ -136,7 +139,9 @@ TEST(BoundaryMedia, VolumetricShadowOfATranslatingOccluder) {
 }
 
 // (2) The occluder in view, seen through the fog: its silhouette (the primary term: the transmittance to the
-// edge, the fog and floor behind it) plus its shadow (direct term).
+// edge, the fog and floor behind it) plus its shadow (direct term); with the image-space first vertex (the
+// jump L_occluder − L_beyond) and in material form (−L_beyond, the far side's medium and floor points moving
+// relative to the edge). The black occluder and the static rest make the interior term zero in both.
 TEST(BoundaryMedia, SilhouetteSeenThroughFog) {
     auto scene = fog_scene(16, 1.0f);
     Parameters params(*scene);
@@ -144,11 +149,38 @@ TEST(BoundaryMedia, SilhouetteSeenThroughFog) {
     const SceneEdges edges(*scene);
     const PrimaryBoundary primary(*scene, edges);
     const DirectBoundary direct(*scene, edges);
-    const Estimate p = batches(*scene, params, primary, 16, true),
-                   d = batches(*scene, params, direct, 64, true);
     const Reference r = reference(*scene, params, 2e-2, 64);
-    const DiffCheck total = report("primary + direct", sum(p, d), r);
+    for (const FirstVertex first_vertex : {FirstVertex::ImageSpace, FirstVertex::Material}) {
+        const char* name = first_vertex == FirstVertex::ImageSpace ? "image-space" : "material form";
+        const Estimate p = batches(*scene, params, primary, 16, true, first_vertex),
+                       d = batches(*scene, params, direct, 64, true, first_vertex);
+        const DiffCheck total = report((std::string(name) + ": primary + direct").c_str(), sum(p, d), r);
+        const DiffCheck direct_only = report((std::string(name) + ": direct only").c_str(), d, r);
+        EXPECT_TRUE(total.passes()) << name << ": " << describe(total);
+        EXPECT_FALSE(direct_only.passes())
+            << name << ": the silhouette's jump must matter: " << describe(direct_only);
+    }
+}
+
+// (4) Multiple scattering (max_depth 3): shadows of the occluder above the view seen through one more bounce
+// in the fog or on the floor. The indirect term's emitter technique walks the detector subpath through the
+// fog (free flights, phase sampling, camera connections with transmittance); its multi-directional technique
+// draws both endpoints by sampleInteraction (surface or medium sources and receivers, Eqs. 40–43) and
+// estimates the source subpath volumetrically.
+TEST(BoundaryMedia, MultipleScatteringShadows) {
+    auto scene = fog_scene(16, 2.3f, "0.2, 3.2, 0", 3);
+    Parameters params(*scene);
+    params.enable({parse_param_selection("occluder.translate=1,0,0")});
+    const SceneEdges edges(*scene);
+    const DirectBoundary direct(*scene, edges);
+    const IndirectBoundary indirect(*scene, edges);
+    const Estimate d = batches(*scene, params, direct, 64, true, FirstVertex::Auto, 3);
+    const auto start = std::chrono::steady_clock::now();
+    const Estimate i = batches(*scene, params, indirect, 128, true, FirstVertex::Auto, 3);
+    std::printf("  indirect term %.2f s\n", seconds_since(start));
+    const Reference r = reference(*scene, params, 2e-2, 128);
+    const DiffCheck total = report("direct + indirect", sum(d, i), r);
     const DiffCheck direct_only = report("direct only", d, r);
     EXPECT_TRUE(total.passes()) << describe(total);
-    EXPECT_FALSE(direct_only.passes()) << "the silhouette's jump must matter: " << describe(direct_only);
+    EXPECT_FALSE(direct_only.passes()) << "multiple scattering must matter: " << describe(direct_only);
 }
