@@ -6,6 +6,7 @@
 // surface-only boundary segments (PsdrOptions::volume_boundary = false, the DTRT-like baseline) must visibly
 // miss the shadow sheets.
 #include "core/batch_stats.h"
+#include "core/rng.h"
 #include "diff/boundary_segment.h"
 #include "diff/direct_boundary.h"
 #include "diff/indirect_boundary.h"
@@ -22,10 +23,16 @@ using namespace penumbra::test;
 
 namespace {
 
-// A floor under a black square occluder and a point light, inside a fog cube behind an index-matched (null)
-// boundary; the camera looks in from outside. `occluder_y`: the occluder's height (in view, or above it).
-std::unique_ptr<Scene> fog_scene(int res, float occluder_y, const std::string& light = "0.2, 3.2, 0",
-                                 int max_depth = 2) {
+std::string point_light(const std::string& position) {
+    return "<emitter type=\"point\" id=\"bulb\"><point name=\"position\" value=\"" + position +
+           "\"/><rgb name=\"intensity\" value=\"30\"/></emitter>";
+}
+
+// A floor under a black square occluder and a light (by default a point light in the fog), inside a fog cube
+// behind an index-matched (null) boundary; the camera looks in from outside. `occluder_y`: the occluder's
+// height (in view, or above it).
+std::unique_ptr<Scene> fog_scene(int res, float occluder_y,
+                                 const std::string& light = point_light("0.2, 3.2, 0"), int max_depth = 2) {
     const std::string xml =
         "<scene version=\"3.0.0\">"
         "<integrator type=\"volpath\"><integer name=\"max_depth\" value=\"" +
@@ -50,9 +57,8 @@ std::unique_ptr<Scene> fog_scene(int res, float occluder_y, const std::string& l
         "<shape type=\"rectangle\" id=\"occluder\"><transform name=\"to_world\"><scale value=\"0.35\"/>"
         "<rotate x=\"1\" angle=\"90\"/><rotate y=\"1\" angle=\"25\"/><translate value=\"0, " +
         std::to_string(occluder_y) +
-        ", 0\"/></transform><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0\"/></bsdf></shape>"
-        "<emitter type=\"point\" id=\"bulb\"><point name=\"position\" value=\"" +
-        light + "\"/><rgb name=\"intensity\" value=\"30\"/></emitter></scene>";
+        ", 0\"/></transform><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0\"/></bsdf></shape>" +
+        light + "</scene>";
     return load_scene_string(xml);
 }
 
@@ -168,7 +174,7 @@ TEST(BoundaryMedia, SilhouetteSeenThroughFog) {
 // draws both endpoints by sampleInteraction (surface or medium sources and receivers, Eqs. 40–43) and
 // estimates the source subpath volumetrically.
 TEST(BoundaryMedia, MultipleScatteringShadows) {
-    auto scene = fog_scene(16, 2.3f, "0.2, 3.2, 0", 3);
+    auto scene = fog_scene(16, 2.3f, point_light("0.2, 3.2, 0"), 3);
     Parameters params(*scene);
     params.enable({parse_param_selection("occluder.translate=1,0,0")});
     const SceneEdges edges(*scene);
@@ -183,4 +189,61 @@ TEST(BoundaryMedia, MultipleScatteringShadows) {
     const DiffCheck direct_only = report("direct only", d, r);
     EXPECT_TRUE(total.passes()) << describe(total);
     EXPECT_FALSE(direct_only.passes()) << "multiple scattering must matter: " << describe(direct_only);
+}
+
+// (5) A light at infinity (§4.3: a zero-measure emitter whose boundary segments start outside the scene and
+// enter the fog through its null boundary): the sun's volumetric shadow. Its shadow on the floor is perfectly
+// hard: the reference needs a smaller step (and more samples) than the point light's.
+TEST(BoundaryMedia, VolumetricShadowUnderADirectionalLight) {
+    auto scene =
+        fog_scene(16, 2.3f,
+                  "<emitter type=\"directional\" id=\"sun\"><vector name=\"direction\" value=\"-0.1, -1, "
+                  "0.05\"/><rgb name=\"irradiance\" value=\"3\"/></emitter>");
+    Parameters params(*scene);
+    params.enable({parse_param_selection("occluder.translate=1,0,0")});
+    const SceneEdges edges(*scene);
+    const DirectBoundary direct(*scene, edges);
+    const Reference r = reference(*scene, params, 1e-2, 256);
+    const DiffCheck total = report("direct (volume endpoints)", batches(*scene, params, direct, 64, true), r);
+    const DiffCheck surface =
+        report("direct (surface endpoints only)", batches(*scene, params, direct, 64, false), r);
+    EXPECT_TRUE(total.passes()) << describe(total);
+    EXPECT_FALSE(surface.passes()) << "surface endpoints alone must miss the shadow sheet: "
+                                   << describe(surface);
+}
+
+// Reverse mode: each boundary term's gradient equals its forward derivative on the same samples through media
+// (⟨a, D v⟩ = ⟨Dᵀ a, v⟩), with medium endpoints, volumetric detector subpaths and the primary term's far
+// side.
+TEST(BoundaryMedia, ReverseModeMatchesForward) {
+    auto scene = fog_scene(16, 1.0f, point_light("0.2, 3.2, 0"), 3);
+    Parameters params(*scene);
+    params.enable({parse_param_selection("occluder.translate=1,0,0")});
+    const SceneEdges edges(*scene);
+    const PrimaryBoundary primary(*scene, edges);
+    const DirectBoundary direct(*scene, edges);
+    const IndirectBoundary indirect(*scene, edges);
+    Image adjoint(16, 16);
+    PCG32 rng(3);
+    for (auto& a : adjoint.pixels)
+        a = Color3f(rng.next_float(), rng.next_float(), rng.next_float());
+    for (const BoundaryTerm* term :
+         {static_cast<const BoundaryTerm*>(&primary), static_cast<const BoundaryTerm*>(&direct),
+          static_cast<const BoundaryTerm*>(&indirect)}) {
+        BoundaryOptions o;
+        o.samples_per_pixel = 4;
+        o.seed = 5;
+        o.path.max_depth = 3;
+        const Image forward = term->derivative(params, o);
+        std::vector<double> gradient(1, 0.0);
+        term->gradient(params, adjoint, o, gradient);
+        double lhs = 0, scale = 0;
+        for (size_t i = 0; i < adjoint.pixels.size(); ++i) {
+            lhs += dot(Vec3d(adjoint.pixels[i]), Vec3d(forward.pixels[i]));
+            scale += std::abs(dot(Vec3d(adjoint.pixels[i]), Vec3d(forward.pixels[i])));
+        }
+        EXPECT_GT(scale, 0.0);
+        EXPECT_NEAR(lhs, gradient[0], 1e-4 * scale + 1e-6)
+            << "⟨a, Jv⟩ = " << lhs << ", ⟨Jᵀa, v⟩ = " << gradient[0];
+    }
 }
