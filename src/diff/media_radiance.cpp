@@ -65,4 +65,29 @@ Color3f vertex_radiance(const Scene& scene, const RadianceVertex& start, int max
     return L;
 }
 
+ArrivingRadiance arriving_radiance(const Scene& scene, const Ray& ray, const Medium* medium,
+                                   const PathSettings& settings, Sampler& sampler, RayCounter& rays) {
+    ArrivingRadiance out;
+    out.end = sample_interaction(scene, ray, medium, true, sampler, rays);
+    const bool emission = !settings.hide_emitters;
+    switch (out.end.kind) {
+    case FlightEnd::Kind::None: return out;
+    case FlightEnd::Kind::Escaped:
+        if (emission && settings.max_depth != 0) out.radiance = scene.eval_environment(ray.d);
+        break;
+    case FlightEnd::Kind::Medium: {
+        RadianceVertex v{SurfaceInteraction3f{}, ray.d * -1.f, out.end.medium};
+        v.si.p = out.end.p;
+        out.radiance = vertex_radiance(scene, v, settings.max_depth, false, settings, sampler, rays);
+        break;
+    }
+    case FlightEnd::Kind::Surface:
+        out.radiance = vertex_radiance(scene, {out.end.si, ray.d * -1.f, out.end.medium}, settings.max_depth, emission,
+                                       settings, sampler, rays);
+        break;
+    }
+    out.radiance *= out.end.weight;
+    return out;
+}
+
 } // namespace penumbra

@@ -7,6 +7,7 @@
 // path whose vertices have smooth BSDFs or phase functions; paths that reach an area light through a chain of
 // delta lobes are left out.
 #pragma once
+#include "diff/media_walk.h"
 #include "render/path_tracer.h"
 
 namespace penumbra {
@@ -25,5 +26,16 @@ struct RadianceVertex {
 // vertex's own emission.
 Color3f vertex_radiance(const Scene& scene, const RadianceVertex& v, int max_depth, bool emission,
                         const PathSettings& settings, Sampler& sampler, RayCounter& rays);
+
+// The radiance arriving at ray.o along −ray.d from where a free flight along `ray` (starting in `medium`) ends: a
+// medium vertex (its in-scattering), a surface (its emission unless settings hide it at the first vertex, and
+// its reflection) or the environment, times the flight's weight; with that end, whose material point the
+// boundary terms move.
+struct ArrivingRadiance {
+    Color3f radiance{0.f};
+    FlightEnd end;
+};
+ArrivingRadiance arriving_radiance(const Scene& scene, const Ray& ray, const Medium* medium,
+                                   const PathSettings& settings, Sampler& sampler, RayCounter& rays);
 
 } // namespace penumbra

@@ -309,39 +309,17 @@ Color3f seen_radiance(const Scene& scene, const Ray& ray, const SurfaceInteracti
 }
 
 // The far side of a silhouette in media: what lies beyond the edge's depth along the far probe (Algorithm 1's
-// sampleInteraction from the edge on): a medium vertex, the background surface, or the environment.
-struct FarSide {
-    Color3f radiance{0.f}; // Tr(camera → edge) times the flight's weight and the radiance leaving its end
-    FlightEnd end;
-};
-
-FarSide far_side(const Scene& scene, const EdgeCrossing& c, const PathSettings& settings, Sampler& sampler,
-                 RayCounter& rays) {
-    FarSide out;
+// sampleInteraction from the edge on: a medium vertex, the background surface, or the environment), times the
+// transmittance from the camera to the edge.
+ArrivingRadiance far_side(const Scene& scene, const EdgeCrossing& c, const PathSettings& settings, Sampler& sampler,
+                          RayCounter& rays) {
     const Ray& ray = c.ray[1];
     const float depth = norm(c.x_edge - ray.o);
     const Medium* medium = sensor_medium(scene);
     const Color3f tr = walk_transmittance(scene, Ray(ray.o, ray.d, depth), medium, sampler, rays);
-    if (is_black(tr)) return out;
-    out.end = sample_interaction(scene, Ray(ray(depth), ray.d), medium, true, sampler, rays);
-    const bool emission = !settings.hide_emitters;
-    switch (out.end.kind) {
-    case FlightEnd::Kind::None: return out;
-    case FlightEnd::Kind::Escaped:
-        if (emission && settings.max_depth != 0) out.radiance = scene.eval_environment(ray.d);
-        break;
-    case FlightEnd::Kind::Medium: {
-        RadianceVertex v{SurfaceInteraction3f{}, ray.d * -1.f, out.end.medium};
-        v.si.p = out.end.p;
-        out.radiance = vertex_radiance(scene, v, settings.max_depth, false, settings, sampler, rays);
-        break;
-    }
-    case FlightEnd::Kind::Surface:
-        out.radiance = vertex_radiance(scene, {out.end.si, ray.d * -1.f, out.end.medium}, settings.max_depth, emission,
-                                       settings, sampler, rays);
-        break;
-    }
-    out.radiance *= tr * out.end.weight;
+    if (is_black(tr)) return {};
+    ArrivingRadiance out = arriving_radiance(scene, Ray(ray(depth), ray.d), medium, settings, sampler, rays);
+    out.radiance *= tr;
     return out;
 }
 
@@ -351,10 +329,10 @@ FarSide far_side(const Scene& scene, const EdgeCrossing& c, const PathSettings& 
 // sides, is left out (only the far side beyond the edge's depth, `far`, is estimated; in material form the
 // medium's points in front of the edge are not cut either).
 Color3f jump(const Scene& scene, const EdgeCrossing& c, bool image_space, bool media, const PathSettings& settings,
-             Sampler& sampler, RayCounter& rays, FarSide* far = nullptr) {
+             Sampler& sampler, RayCounter& rays, ArrivingRadiance* far = nullptr) {
     Color3f L_2;
     if (media) {
-        FarSide f = far_side(scene, c, settings, sampler, rays);
+        const ArrivingRadiance f = far_side(scene, c, settings, sampler, rays);
         L_2 = f.radiance * c.weight[1];
         if (far) *far = f;
     } else {
@@ -466,7 +444,7 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
     Vec2<Var> s_e, s_b(Var(c.s.x), Var(c.s.y));
     Var j;
     if (!sensor.film_position(form.to_reference_camera(x_e, eye), view, s_e, j)) return out;
-    FarSide far;
+    ArrivingRadiance far;
     const Color3f value = jump(scene, c, sil.image_space, sil.media, settings, sampler, rays, &far);
     // Material form: the background's material point moves too (Eq. 50); in media, the far side's vertex (a
     // medium vertex by the volume motion; the environment does not move).
