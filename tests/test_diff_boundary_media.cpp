@@ -12,6 +12,7 @@
 #include "diff/indirect_boundary.h"
 #include "diff/primary_boundary.h"
 #include "diff_check.h"
+#include "media_test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -31,17 +32,19 @@ std::string point_light(const std::string& position) {
 // A floor under a black square occluder and a light (by default a point light in the fog), inside a fog cube
 // behind an index-matched (null) boundary; the camera looks in from outside. `occluder_y`: the occluder's
 // height (in view, or above it).
+const std::string homogeneous_fog =
+    "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_t\" value=\"0.35\"/>"
+    "<rgb name=\"albedo\" value=\"0.9, 0.8, 0.7\"/><phase type=\"hg\"><float name=\"g\" "
+    "value=\"0.3\"/></phase>"
+    "</medium>";
+
 std::unique_ptr<Scene> fog_scene(int res, float occluder_y,
-                                 const std::string& light = point_light("0.2, 3.2, 0"), int max_depth = 2) {
+                                 const std::string& light = point_light("0.2, 3.2, 0"), int max_depth = 2,
+                                 const std::string& medium = homogeneous_fog, const std::string& dir = ".") {
     const std::string xml =
         "<scene version=\"3.0.0\">"
         "<integrator type=\"volpath\"><integer name=\"max_depth\" value=\"" +
-        std::to_string(max_depth) +
-        "\"/></integrator>"
-        "<medium type=\"homogeneous\" id=\"fog\"><float name=\"sigma_t\" value=\"0.35\"/>"
-        "<rgb name=\"albedo\" value=\"0.9, 0.8, 0.7\"/><phase type=\"hg\"><float name=\"g\" "
-        "value=\"0.3\"/></phase>"
-        "</medium>"
+        std::to_string(max_depth) + "\"/></integrator>" + medium +
         "<sensor type=\"perspective\" id=\"cam\"><float name=\"fov\" value=\"45\"/><transform "
         "name=\"to_world\">"
         "<lookat origin=\"0, 2.6, 3.4\" target=\"0, 0.6, 0\" up=\"0, 1, 0\"/></transform>"
@@ -59,7 +62,7 @@ std::unique_ptr<Scene> fog_scene(int res, float occluder_y,
         std::to_string(occluder_y) +
         ", 0\"/></transform><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0\"/></bsdf></shape>" +
         light + "</scene>";
-    return load_scene_string(xml);
+    return load_scene_string(xml, dir);
 }
 
 struct Estimate {
@@ -139,6 +142,34 @@ TEST(BoundaryMedia, VolumetricShadowOfATranslatingOccluder) {
     std::printf("  direct term %.2f s, finite differences %.2f s\n", t_direct, seconds_since(start));
     const DiffCheck total = report("direct (volume endpoints)", with_sheets, r);
     const DiffCheck surface = report("direct (surface endpoints only)", surfaces_only, r);
+    EXPECT_TRUE(total.passes()) << describe(total);
+    EXPECT_FALSE(surface.passes()) << "surface endpoints alone must miss the shadow sheet: "
+                                   << describe(surface);
+}
+
+// (1') The same in a heterogeneous fog (a density grid): transmittances by ratio tracking, the flights beyond
+// the edge by delta tracking.
+TEST(BoundaryMedia, VolumetricShadowInAHeterogeneousFog) {
+    const TempDir dir;
+    write_bytes(dir.str() + "/density.vol",
+                vol_bytes({8, 8, 8}, 1, Vec3f(0.f), Vec3f(1.f), [](int x, int y, int z, int) {
+                    return 0.1f + 0.08f * float(x) + 0.03f * float((y * z) % 7);
+                }));
+    auto scene =
+        fog_scene(16, 2.3f, point_light("0.2, 3.2, 0"), 2,
+                  "<medium type=\"heterogeneous\" id=\"fog\"><volume type=\"gridvolume\" name=\"sigma_t\">"
+                  "<string name=\"filename\" value=\"density.vol\"/><transform name=\"to_world\"><scale "
+                  "value=\"5\"/><translate x=\"-2.5\" y=\"-1.5\" z=\"-2.5\"/></transform></volume>"
+                  "<float name=\"albedo\" value=\"0.9\"/></medium>",
+                  dir.str());
+    Parameters params(*scene);
+    params.enable({parse_param_selection("occluder.translate=1,0,0")});
+    const SceneEdges edges(*scene);
+    const DirectBoundary direct(*scene, edges);
+    const Reference r = reference(*scene, params, 2e-2, 256);
+    const DiffCheck total = report("direct (volume endpoints)", batches(*scene, params, direct, 256, true), r);
+    const DiffCheck surface =
+        report("direct (surface endpoints only)", batches(*scene, params, direct, 64, false), r);
     EXPECT_TRUE(total.passes()) << describe(total);
     EXPECT_FALSE(surface.passes()) << "surface endpoints alone must miss the shadow sheet: "
                                    << describe(surface);

@@ -55,7 +55,12 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
     if (!sample_grazing_direction(*x_b.edge, sampler.next_2d(), w_b, pdf_w)) return out;
 
     // x_S0 (line 4): a free flight behind x_B along −ω_B, ending at a medium vertex or the first surface.
-    const Medium* edge_medium = context.media ? medium_at(scene, x_b.p, rays) : nullptr;
+    // The medium around x_B: a line grazing an edge passes outside the edge's shape (its exterior medium, if the
+    // shape bounds media; otherwise the medium found by the walk from the sensor).
+    const Shape& edge_shape = *x_b.edge->shape;
+    const Medium* edge_medium = !context.media                              ? nullptr
+                                : edge_shape.interior || edge_shape.exterior ? edge_shape.exterior.get()
+                                                                             : medium_at(scene, x_b.p, rays);
     const FlightEnd x_s0 = sample_interaction(scene, Ray(x_b.p - w_b * ray_offset_scale(x_b.p), w_b * -1.f), edge_medium,
                                               context.volume_endpoints, sampler, rays);
     SegmentSource source{.p = x_s0.p, .n = Vec3f(0.f), .medium = x_s0.medium, .in_medium = true, .from_edge = true,
