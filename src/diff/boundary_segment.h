@@ -83,7 +83,7 @@ struct SegmentSource {
     Vec3f n;
     const Shape* shape = nullptr;
     uint32_t prim = 0;
-    Vec2f bary;
+    Vec2f bary = Vec2f(0.f);
     bool infinite = false;
     Vec3f d = Vec3f(0.f);
     const Emitter* emitter = nullptr; // a point or directional light, whose motions move the source
