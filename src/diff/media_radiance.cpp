@@ -1,68 +1,29 @@
 #include "diff/media_radiance.h"
 
 #include "diff/media_walk.h"
+#include "render/volpath_material.h"
 
 namespace penumbra {
 
 Color3f vertex_radiance(const Scene& scene, const RadianceVertex& start, int max_depth, bool emission,
                         const PathSettings& settings, Sampler& sampler, RayCounter& rays) {
-    const BSDFContext ctx{TransportMode::Radiance};
-    const unsigned max_vertices = unsigned(max_depth); // -1 wraps to "unbounded"
-    Color3f L(0.f), beta(1.f);
-    RadianceVertex v = start;
-    if (emission && v.si.is_valid() && v.si.emitter()) L += v.si.emitter()->eval(v.si);
-    if (scene.emitters.empty()) return L;
-    for (unsigned depth = 0; depth + 1 < max_vertices; ++depth) {
-        const bool surface = v.si.is_valid();
-        const BSDF* bsdf = surface ? v.si.bsdf() : nullptr;
-        if (surface && !bsdf) break;
-        Interaction3f ref;
-        ref.p = v.si.p;
-        ref.n = surface ? v.si.n : Vec3f(0.f);
-        // Next-event estimation: f (BSDF cosine or phase function) L_e Tr / p.
-        const auto [ds, em_weight] = scene.sample_emitter_direction(ref, sampler.next_2d(), false);
-        if (!is_black(em_weight)) {
-            const Color3f f = surface ? bsdf->eval(ctx, v.si, v.si.to_local(ds.d))
-                                      : Color3f(v.medium->phase->eval<float>(v.to_viewer, ds.d));
-            if (!is_black(f)) {
-                const Medium* medium =
-                    surface ? target_medium(*v.si.shape, v.si.n, ds.d, v.medium) : v.medium;
-                const Ray shadow = std::isinf(ds.dist) ? ref.spawn_ray(ds.d) : ref.spawn_ray_to(ds.p);
-                L += beta * f * em_weight * walk_transmittance(scene, shadow, medium, sampler, rays);
-            }
-        }
-        // The next vertex: BSDF or phase sampling (weight 1), then a free flight.
-        Vec3f d;
-        Ray ray;
-        const Medium* medium = v.medium;
-        if (surface) {
-            const float u1 = sampler.next_1d();
-            const auto [bs, weight] = bsdf->sample(ctx, v.si, u1, sampler.next_2d());
-            if (is_black(weight)) break;
-            d = v.si.to_world(bs.wo);
-            beta *= weight;
-            medium = target_medium(*v.si.shape, v.si.n, d, medium);
-            ray = v.si.spawn_ray(d);
-        } else {
-            const auto [wo, pdf] = v.medium->phase->sample(v.to_viewer, sampler.next_2d());
-            if (!(pdf > 0.f)) break;
-            d = wo;
-            ray = Ray(v.si.p, d);
-        }
-        const FlightEnd end = sample_interaction(scene, ray, medium, true, sampler, rays);
-        if (end.kind == FlightEnd::Kind::None || end.kind == FlightEnd::Kind::Escaped) break;
-        beta *= end.weight;
-        v.si = end.kind == FlightEnd::Kind::Surface ? end.si : SurfaceInteraction3f{};
-        v.si.p = end.p;
-        v.to_viewer = d * -1.f;
-        v.medium = end.medium;
-        if (int(depth) + 1 >= settings.rr_depth) {
-            const float q = std::min(max_component(beta), 0.95f);
-            if (sampler.next_1d() >= q) break;
-            beta /= q;
-        }
-    }
-    return L;
+    Color3f L(0.f);
+    const bool surface = start.si.is_valid();
+    if (emission && surface && start.si.emitter()) L += start.si.emitter()->eval(start.si);
+    // The rest of the path: render/volpath_material.h on the reference geometry, its own hero channel drawn here
+    // (the flights that reached the vertex were weighted by the caller).
+    VolVertex<float> v;
+    v.surface = surface;
+    v.hit = start.si;
+    v.si = start.si;
+    v.p0 = v.p = start.si.p;
+    v.medium = start.medium;
+    const Vec3f prev = start.si.p + start.to_viewer;
+    const int hero = std::min(int(sampler.next_1d() * 3.f), 2);
+    PathSettings rest = settings;
+    rest.max_depth = max_depth;
+    return L + trace_volpath_from<float>(scene, sampler, v, prev, prev, hero, Color3f(1.f), ReferenceGeometry{}, rest,
+                                         rays);
 }
 
 ArrivingRadiance arriving_radiance(const Scene& scene, const Ray& ray, const Medium* medium,

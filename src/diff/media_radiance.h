@@ -1,11 +1,7 @@
 // Radiance leaving a vertex of a boundary path through participating media: the source subpath of Algorithm 1
-// (paper 001 §5.2, line 16) from a surface or medium vertex x_S0, and the radiance seen on either side of a
-// silhouette behind which a medium continues (the primary term). Volumetric path tracing with next-event
-// estimation at every vertex (through media and null boundaries, render/volume_visibility.h semantics), free
-// flights between vertices (diff/media_walk.h) and phase or BSDF sampling. Emission reached by sampling is
-// not counted beyond the first vertex (next-event estimation alone carries it), which is unbiased for every
-// path whose vertices have smooth BSDFs or phase functions; paths that reach an area light through a chain of
-// delta lobes are left out.
+// (paper 001 §5.2, line 16) from a surface or medium vertex x_S0, the radiance seen beyond a silhouette's edge
+// (the primary term) and through a pixel's edge (the pixel-boundary term): the volumetric path tracer of
+// render/volpath_material.h on the reference geometry, started at the vertex.
 #pragma once
 #include "diff/media_walk.h"
 #include "render/path_tracer.h"
