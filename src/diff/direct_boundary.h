@@ -5,7 +5,9 @@
 // with W_j the camera importance (filter at the projection times |ds/dA|), v the velocity of the shadow
 // curve relative to the receiver's material motion and n_shadow its normal pointing into the shadow. It is
 // sampled from edge points x_B (uniform by length) and emitter samples y, extending y -> x_B to the receiver,
-// with dℓ(x_D) = |dx_D/dx_B| dℓ(x_B) along the edge (diff/boundary_segment.h).
+// with dℓ(x_D) = |dx_D/dx_B| dℓ(x_B) along the edge (diff/boundary_segment.h). In participating media the
+// segment carries its transmittance and may end at a medium vertex on the shadow sheet behind the edge
+// (σ_s, the phase function toward the camera, no cosine; diff/boundary_segment.h gives the sheet's measure).
 #pragma once
 #include "diff/boundary_driver.h"
 #include "diff/boundary_segment.h"

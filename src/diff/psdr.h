@@ -2,7 +2,8 @@
 // term (diff/interior.h) plus the boundary terms: primary (camera segments, diff/primary_boundary.h), direct
 // (emitter segments seen by the camera, diff/direct_boundary.h) and indirect (every other boundary segment,
 // diff/indirect_boundary.h), plus the pixel-boundary term of a box filter (diff/pixel_boundary.h). Each term's
-// image is kept for validation against finite differences.
+// image is kept for validation against finite differences. In participating media the boundary segments may end
+// at medium vertices (shadow sheets; PsdrOptions::volume_boundary).
 #pragma once
 #include "diff/interior.h"
 #include "diff/direct_boundary.h"
