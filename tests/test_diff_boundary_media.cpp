@@ -1,10 +1,13 @@
 // Boundary terms through participating media (paper 001 §5.2, Algorithm 1; §4.3) against central finite
-// differences: volumetric shadows (boundary segments ending on the shadow sheet inside a fog), silhouettes
-// seen through the fog (the primary term), and a point light moving inside the medium. The occluders are
-// black and the paths have at most one scattering vertex (max_depth 2), so that moving an occluder changes
-// the image only through visibility: the boundary terms alone must match the finite differences, and the
-// surface-only boundary segments (PsdrOptions::volume_boundary = false, the DTRT-like baseline) must visibly
-// miss the shadow sheets.
+// differences: volumetric shadows (boundary segments ending on the shadow sheet inside a fog, homogeneous or
+// heterogeneous, from a point or a directional light), silhouettes seen through the fog (the primary term),
+// shadows seen through one more scattering (the indirect term), and a point light moving inside the medium.
+// The occluders are black and everything else is static, so that moving an occluder changes the image only
+// through visibility: the interior term is zero and the boundary terms alone must match the finite
+// differences (run directly, 16 batches each), while the surface-only boundary segments
+// (PsdrOptions::volume_boundary = false, the DTRT-like baseline) must visibly miss the shadow sheets. The
+// moving light changes the shading too: there psdr's interior + direct terms must match and the interior term
+// alone must miss. Tolerances are diff_check.h's, from the batches' standard errors.
 #include "core/batch_stats.h"
 #include "core/rng.h"
 #include "diff/boundary_segment.h"
