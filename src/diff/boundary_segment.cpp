@@ -263,7 +263,7 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext&
                                                                        MeshVertices{source.shape->mesh}))
                                     .p
                : light            ? form.light_position(*light, source.p)
-               : source.in_medium ? context.motion.position(source.p, source.medium, nullptr)
+               : source.in_medium ? form.volume_motion().position(source.p, source.medium, nullptr)
                                   : Vec3<Var>(source.p);
     };
 
@@ -279,7 +279,7 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext&
         out.receiver.p = x_d;
         out.cos_receiver = 1.f;
         out.dark_point = x_d + n * (1e-4f * (1.f + norm(x_d - x_b.p)));
-        out.velocity = sheet_velocity(source_t(), a_t, b_t, x_d, n, context.motion.position(x_d, end.medium, nullptr));
+        out.velocity = sheet_velocity(source_t(), a_t, b_t, x_d, n, form.volume_motion().position(x_d, end.medium, nullptr));
         out.velocity_seen = out.velocity;
         out.valid = true;
         return out;

@@ -19,7 +19,6 @@
 #include "core/distribution.h"
 #include "diff/edges.h"
 #include "diff/material_form.h"
-#include "diff/volume_motion.h"
 #include "render/integrator.h"
 
 namespace penumbra {
@@ -115,12 +114,11 @@ struct BoundarySegment {
     const Var& velocity_at_depth(int t) const { return t == 0 ? velocity_seen : velocity; }
 };
 
-// What boundary segments are traced with: the motions of surface and medium vertices, and whether a segment
-// may end in a medium (false: the surface-only boundary segments of a DTRT-like baseline); `media`: whether the
-// scene has any (otherwise no medium look-ups).
+// What boundary segments are traced with: the motions of surface and medium vertices (the material form and
+// its volume motion), and whether a segment may end in a medium (false: the surface-only boundary segments of a
+// DTRT-like baseline); `media`: whether the scene has any (otherwise no medium look-ups).
 struct SegmentContext {
     const MaterialForm& form;
-    const VolumeMotion& motion;
     bool volume_endpoints;
     bool media;
 };
@@ -129,7 +127,7 @@ struct SegmentContext {
 // end in a medium). Invalid when the edge does not graze the line, the segment source → x_B is blocked, nothing
 // (or no BSDF) lies beyond, the flight is absorbed, or the curve degenerates. The lit side is lit
 // (source → x_B → x_D0 is clear); the occluded side is the one the edge's faces lie on. Records the velocities
-// on the thread's tape; a medium vertex moves by the context's volume motion.
+// on the thread's tape; a medium vertex moves by the volume motion.
 BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext& context, const SegmentSource& source,
                                        const EdgePoint& x_b, Sampler& sampler, RayCounter& rays);
 

@@ -121,8 +121,7 @@ Image DirectBoundary::derivative(const Parameters& params, const BoundaryOptions
     if (edges_.empty() || scene_.emitters.empty())
         return Image(scene_.sensor->film->width, scene_.sensor->film->height);
     const MaterialForm form(scene_, params, options.first_vertex);
-    const VolumeMotion motion(scene_, params);
-    const SegmentContext context{form, motion, options.volume_endpoints, edges_.media};
+    const SegmentContext context{form, options.volume_endpoints, edges_.media};
     return boundary_derivative(scene_, params, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
         return sample_emitter_boundary(scene_, edges_, context, 0, 0, options.path, index, sampler, rays);
     });
@@ -133,8 +132,7 @@ void DirectBoundary::gradient(const Parameters& params, const Image& adjoint, co
     check_emission_jumps(scene_, params);
     if (edges_.empty() || scene_.emitters.empty()) return;
     const MaterialForm form(scene_, params, options.first_vertex);
-    const VolumeMotion motion(scene_, params);
-    const SegmentContext context{form, motion, options.volume_endpoints, edges_.media};
+    const SegmentContext context{form, options.volume_endpoints, edges_.media};
     boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
         return sample_emitter_boundary(scene_, edges_, context, 0, 0, options.path, index, sampler, rays);
     }, gradient);

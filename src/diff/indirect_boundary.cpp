@@ -116,8 +116,7 @@ Image IndirectBoundary::derivative(const Parameters& params, const BoundaryOptio
     Image result(film.width, film.height);
     if (edges_.empty()) return result;
     const MaterialForm form(scene_, params, options.first_vertex);
-    const VolumeMotion motion(scene_, params);
-    const SegmentContext context{form, motion, options.volume_endpoints, edges_.media};
+    const SegmentContext context{form, options.volume_endpoints, edges_.media};
     const int t_max = max_detector_depth(options.path, 1);
     if (!scene_.emitters.empty() && (t_max < 0 || t_max >= 1)) {
         result = boundary_derivative(scene_, params, options, EmitterSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
@@ -136,8 +135,7 @@ void IndirectBoundary::gradient(const Parameters& params, const Image& adjoint, 
                                 std::vector<double>& gradient) const {
     if (edges_.empty()) return;
     const MaterialForm form(scene_, params, options.first_vertex);
-    const VolumeMotion motion(scene_, params);
-    const SegmentContext context{form, motion, options.volume_endpoints, edges_.media};
+    const SegmentContext context{form, options.volume_endpoints, edges_.media};
     const int t_max = max_detector_depth(options.path, 1);
     if (!scene_.emitters.empty() && (t_max < 0 || t_max >= 1)) {
         boundary_gradient(scene_, adjoint, options, EmitterSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {

@@ -2,7 +2,6 @@
 
 #include "diff/material_form.h"
 #include "diff/media_radiance.h"
-#include "diff/volume_motion.h"
 #include "render/light_medium.h"
 #include "render/volume_visibility.h"
 
@@ -35,7 +34,7 @@ struct PixelEdges {
 // same offset along the edge and the same random numbers for the path traced there (the sampler is restarted
 // per row/column and stratum), so that what flows in through one edge and out through the other cancels
 // sample by sample where the image is smooth, instead of only in expectation.
-BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, const VolumeMotion& motion, bool media,
+BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, bool media,
                                  const PixelEdges& grid, const PathSettings& settings, uint64_t seed, uint64_t i,
                                  Sampler& sampler, RayCounter& rays) {
     BoundarySample out;
@@ -66,7 +65,7 @@ BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, c
     Vec3<Var> x;
     if (media) {
         const ArrivingRadiance a = arriving_radiance(scene, ray, sensor_medium(scene), settings, sampler, rays);
-        if (a.end.kind == FlightEnd::Kind::Medium) x = motion.position(a.end.p, a.end.medium, nullptr);
+        if (a.end.kind == FlightEnd::Kind::Medium) x = form.volume_motion().position(a.end.p, a.end.medium, nullptr);
         else if (a.end.kind == FlightEnd::Kind::Surface) x = form.vertex(a.end.si).p;
         else return out; // the environment seen directly does not move with the geometry
         L = a.radiance * ray_weight;
@@ -111,11 +110,10 @@ Image PixelBoundary::derivative(const Parameters& params, const BoundaryOptions&
     const Film& film = *scene_.sensor->film;
     if (!needs_pixel_boundary(scene_, params, options.first_vertex)) return Image(film.width, film.height);
     const MaterialForm form(scene_, params, options.first_vertex);
-    const VolumeMotion motion(scene_, params);
     const bool media = scene_has_media(scene_);
     const PixelEdges grid = pixel_edges(film, options);
     return boundary_derivative(scene_, params, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
-        return sample_pixel_edge(scene_, form, motion, media, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
+        return sample_pixel_edge(scene_, form, media, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
     }, grid.samples());
 }
 
@@ -123,11 +121,10 @@ void PixelBoundary::gradient(const Parameters& params, const Image& adjoint, con
                              std::vector<double>& gradient) const {
     if (!needs_pixel_boundary(scene_, params, options.first_vertex)) return;
     const MaterialForm form(scene_, params, options.first_vertex);
-    const VolumeMotion motion(scene_, params);
     const bool media = scene_has_media(scene_);
     const PixelEdges grid = pixel_edges(*scene_.sensor->film, options);
     boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
-        return sample_pixel_edge(scene_, form, motion, media, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
+        return sample_pixel_edge(scene_, form, media, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
     }, gradient, grid.samples());
 }
 

@@ -425,7 +425,7 @@ BoundarySample sample_terminator(const Scene& scene, const Silhouettes& sil, con
 //   image-space first vertex: (L_1 − L_2) ((s_edge(θ) − s) · n);
 //   material form: −L_2 ((s_edge(θ) − s_bg(θ)) · n) for silhouettes, s_bg the background's material point.
 BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const MaterialForm& form,
-                               const VolumeMotion& motion, const BoundarySampleIndex& index, Sampler& sampler,
+                               const BoundarySampleIndex& index, Sampler& sampler,
                                const PathSettings& settings, RayCounter& rays) {
     BoundarySample out;
     const Sensor& sensor = *scene.sensor;
@@ -452,7 +452,7 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
         const bool surface = sil.media ? far.end.kind == FlightEnd::Kind::Surface : c.hit[1].is_valid();
         const bool medium = sil.media && far.end.kind == FlightEnd::Kind::Medium;
         if (surface || medium) {
-            const Vec3<Var> x_b = medium ? motion.position(far.end.p, far.end.medium, nullptr)
+            const Vec3<Var> x_b = medium ? form.volume_motion().position(far.end.p, far.end.medium, nullptr)
                                          : form.vertex(sil.media ? far.end.si : c.hit[1]).p;
             if (!sensor.film_position(form.to_reference_camera(x_b, eye), view, s_b, j)) return out;
         }
@@ -519,23 +519,21 @@ PrimaryBoundary::~PrimaryBoundary() = default;
 
 Image PrimaryBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
     const MaterialForm form(scene_, params, options.first_vertex);
-    const VolumeMotion motion(scene_, params);
     const auto silhouettes = prepare(scene_, edges_, params, form, options);
     if (silhouettes->edges.empty() && silhouettes->terminators.empty())
         return Image(scene_.sensor->film->width, scene_.sensor->film->height);
     return boundary_derivative(scene_, params, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
-        return sample_boundary(scene_, *silhouettes, form, motion, index, sampler, options.path, rays);
+        return sample_boundary(scene_, *silhouettes, form, index, sampler, options.path, rays);
     });
 }
 
 void PrimaryBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
                                std::vector<double>& gradient) const {
     const MaterialForm form(scene_, params, options.first_vertex);
-    const VolumeMotion motion(scene_, params);
     const auto silhouettes = prepare(scene_, edges_, params, form, options);
     if (silhouettes->edges.empty() && silhouettes->terminators.empty()) return;
     boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
-        return sample_boundary(scene_, *silhouettes, form, motion, index, sampler, options.path, rays);
+        return sample_boundary(scene_, *silhouettes, form, index, sampler, options.path, rays);
     }, gradient);
 }
 
