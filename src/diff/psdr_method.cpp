@@ -34,6 +34,7 @@ class PsdrMethod final : public DerivativeMethod {
         first_vertex_ = parse_first_vertex(o.get_string("first-vertex", "auto"));
         antithetic_ = !o.get_bool("no-antithetic", false);
         guiding_ = !o.get_bool("no-guiding", false);
+        volume_boundary_ = !o.get_bool("no-volume-boundary", false);
         const int fallback = o.get_int("boundary-spp", -1);
         manual_ = fallback >= 0;
         for (size_t k = 0; k < term_spp_.size(); ++k) {
@@ -93,6 +94,7 @@ class PsdrMethod final : public DerivativeMethod {
         o.interior.first_vertex = first_vertex_;
         o.primary_spp = o.direct_spp = o.indirect_spp = o.pixel_spp = 0;
         o.guiding = guiding_;
+        o.volume_boundary = volume_boundary_;
         if (!boundary_) return o;
         if (manual_) {
             int* spp[4] = {&o.primary_spp, &o.direct_spp, &o.indirect_spp, &o.pixel_spp};
@@ -157,7 +159,7 @@ class PsdrMethod final : public DerivativeMethod {
 
     bool boundary_;
     FirstVertex first_vertex_;
-    bool antithetic_ = true, guiding_ = true, manual_ = false;
+    bool antithetic_ = true, guiding_ = true, volume_boundary_ = true, manual_ = false;
     std::array<int, 4> term_spp_{}; // primary, direct, indirect, pixel; -1: unset
     std::vector<std::pair<Key, PsdrOptions>> calibrated_; // one split per configuration (e.g. per view)
 };
@@ -199,6 +201,10 @@ MethodInfo psdr_method_info() {
              {"no-guiding",
               Type::Bool,
               "sample the primary term's edges by projected length only (no contrast pilot)",
+              {}},
+             {"no-volume-boundary",
+              Type::Bool,
+              "boundary segments end at surfaces only (no shadow sheets in media: a DTRT-like baseline)",
               {}}},
             [](const MethodOptions& o) { return std::make_unique<PsdrMethod>(o, true); }};
 }
