@@ -136,7 +136,9 @@ class PsdrMethod final : public DerivativeMethod {
         const std::string vertex = image_space_first_vertex(scene, params, o.interior.first_vertex)
                                        ? "image-space"
                                        : "material-form";
-        if (!boundary_) return "interior term, " + vertex + " first vertex";
+        const std::string estimator =
+            bidirectional_interior(scene, o.interior.estimator) ? "bidirectional" : "unidirectional";
+        if (!boundary_) return "interior term (" + estimator + "), " + vertex + " first vertex";
         return "interior + boundary terms (" + describe_budget(o) + (manual_ ? ")" : ", calibrated)");
     }
 
