@@ -74,6 +74,19 @@ MeasuredVertex<Var> first_vertex(const MaterialForm& form, const PathVertex& v, 
     return x;
 }
 
+// Why the bidirectional estimator cannot differentiate the scene (empty: it can).
+std::string unsupported(const Scene& scene) {
+    const auto heterogeneous = [](const Medium* m) { return m && !m->is_homogeneous(); };
+    bool het = heterogeneous(sensor_medium(scene));
+    for (const auto& shape : scene.shapes)
+        het = het || heterogeneous(shape->interior.get()) || heterogeneous(shape->exterior.get());
+    for (const auto& e : scene.emitters) {
+        het = het || heterogeneous(e->medium.get());
+        if (e->is_infinite()) return "light subpaths of infinite lights are not differentiated";
+    }
+    return het ? "it differentiates homogeneous media only" : "";
+}
+
 } // namespace
 
 InteriorEstimator parse_interior_estimator(const std::string& name) {
@@ -85,25 +98,16 @@ InteriorEstimator parse_interior_estimator(const std::string& name) {
 
 bool bidirectional_interior(const Scene& scene, InteriorEstimator estimator) {
     if (estimator == InteriorEstimator::Auto)
-        return dynamic_cast<const BidirectionalPathTracer*>(scene.integrator.get()) != nullptr;
+        return dynamic_cast<const BidirectionalPathTracer*>(scene.integrator.get()) != nullptr &&
+               unsupported(scene).empty();
     return estimator == InteriorEstimator::Bidirectional;
 }
 
 void require_bidirectional_support(const Scene& scene) {
-    const auto check = [](const Medium* m) {
-        if (m && !m->is_homogeneous())
-            throw Error("the bidirectional interior estimator differentiates homogeneous media only: use "
-                        "--interior-estimator unidirectional");
-    };
-    check(sensor_medium(scene));
-    for (const auto& shape : scene.shapes)
-        check(shape->interior.get()), check(shape->exterior.get());
-    for (const auto& e : scene.emitters) {
-        check(e->medium.get());
-        if (e->is_infinite())
-            throw Error("the bidirectional interior estimator does not differentiate light subpaths of "
-                        "infinite lights: use --interior-estimator unidirectional");
-    }
+    const std::string why = unsupported(scene);
+    if (!why.empty())
+        throw Error("the bidirectional interior estimator cannot differentiate this scene (" + why +
+                    "): use --interior-estimator unidirectional");
 }
 
 // Σ_{s, t>=2} C_{s,t} f(x̄; θ) / f(x̄; θ0) times the camera factor (paper 001 §7 with §5.1's first vertex).

@@ -13,7 +13,8 @@
 //
 // Limits: free flights along subpaths are re-evaluated in closed form, so media must be homogeneous (the
 // connections' ratio tracking would be fine); light subpaths of infinite lights are not differentiated
-// (next-event estimation and emission found by camera subpaths are). Both throw a clear error.
+// (next-event estimation and emission found by camera subpaths are). Asked for explicitly, such scenes throw
+// a clear error; `auto` falls back to the unidirectional estimator.
 #pragma once
 #include "diff/interior_media.h"
 
@@ -22,7 +23,7 @@
 namespace penumbra {
 
 enum class InteriorEstimator {
-    Auto,           // bidirectional when the scene's integrator is `bdpt`
+    Auto,           // bidirectional when the scene's integrator is `bdpt` (and the scene is supported)
     Unidirectional, // path tracing / volumetric path tracing (diff/interior_media.h)
     Bidirectional,
 };
