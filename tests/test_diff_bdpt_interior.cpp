@@ -6,6 +6,7 @@
 // unidirectional estimators agree, forward and reverse mode are adjoint, and the bidirectional derivative of
 // the caustic scene has a lower variance at equal samples.
 #include "diff_check.h"
+#include "media_test_util.h"
 #include "xml_test_util.h"
 
 #include "core/rng.h"
@@ -106,8 +107,8 @@ TEST_P(BdptInterior, MatchesFiniteDifferences) {
 INSTANTIATE_TEST_SUITE_P(Parameters, BdptInterior,
                          ::testing::Values(BdptParam{true, "fog.sigma_t", 0.04, 16, 128},
                                            BdptParam{true, "fog.albedo", 0.02, 16, 128},
-                                           BdptParam{true, "fog.phase_function.g", 0.05, 16, 128},
-                                           BdptParam{true, "floor_bsdf.reflectance", 0.02, 16, 128},
+                                           BdptParam{false, "fog.phase_function.g", 0.05, 16, 128},
+                                           BdptParam{false, "floor_bsdf.reflectance", 0.02, 16, 128},
                                            BdptParam{false, "lamp.translate=0.5,1,0", 0.02, 16, 128}),
                          [](const auto& info) {
                              std::string name =
@@ -116,6 +117,27 @@ INSTANTIATE_TEST_SUITE_P(Parameters, BdptInterior,
                                  if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
                              return name;
                          });
+
+// A heterogeneous fog (a smooth blob of density over the box): free flights by delta tracking along the
+// subpaths and ratio tracking along connections, re-evaluated from their records.
+TEST(BdptInterior, HeterogeneousMediumMatchesFiniteDifferences) {
+    TempDir dir;
+    write_bytes(dir.str() + "/density.vol",
+                vol_bytes({8, 8, 8}, 1, Vec3f(-1.f), Vec3f(1.f), [](int x, int y, int z, int) {
+                    const float u = x / 7.f - 0.5f, v = y / 7.f - 0.4f, w = z / 7.f - 0.5f;
+                    return 0.3f + 1.5f * std::exp(-(u * u + v * v + w * w) / 0.08f);
+                }));
+    std::string xml = lamp_scene(false, false, "0.1, 1.3, 0");
+    const size_t begin = xml.find("<medium"), end = xml.find("</medium>") + 9;
+    xml.replace(begin, end - begin, R"(<medium type="heterogeneous" id="fog">
+        <volume type="gridvolume" name="sigma_t"><string name="filename" value="density.vol"/></volume>
+        <float name="scale" value="0.8"/><rgb name="albedo" value="0.8, 0.7, 0.6"/>
+        <phase type="hg"><float name="g" value="0.3"/></phase></medium>)");
+    auto scene = load_scene_string(xml, dir.str());
+    const DiffCheck c = bdpt_check(*scene, "fog.scale", 32, 256, 0.05);
+    std::printf("heterogeneous fog.scale: %s\n", describe(c).c_str());
+    EXPECT_TRUE(c.passes()) << describe(c);
+}
 
 // The material-form first vertex (the camera factor of the film, antithetic pairs) in the same estimator.
 TEST(BdptInterior, MaterialFormFirstVertexMatchesFiniteDifferences) {

@@ -76,15 +76,9 @@ MeasuredVertex<Var> first_vertex(const MaterialForm& form, const PathVertex& v, 
 
 // Why the bidirectional estimator cannot differentiate the scene (empty: it can).
 std::string unsupported(const Scene& scene) {
-    const auto heterogeneous = [](const Medium* m) { return m && !m->is_homogeneous(); };
-    bool het = heterogeneous(sensor_medium(scene));
-    for (const auto& shape : scene.shapes)
-        het = het || heterogeneous(shape->interior.get()) || heterogeneous(shape->exterior.get());
-    for (const auto& e : scene.emitters) {
-        het = het || heterogeneous(e->medium.get());
+    for (const auto& e : scene.emitters)
         if (e->is_infinite()) return "light subpaths of infinite lights are not differentiated";
-    }
-    return het ? "it differentiates homogeneous media only" : "";
+    return "";
 }
 
 } // namespace

@@ -11,10 +11,12 @@
 // point and splat into other pixels; with the image-space first vertex, mixing it with the camera ray's
 // parameterization under detached MIS weights would be biased.
 //
-// Limits: free flights along subpaths are re-evaluated in closed form, so media must be homogeneous (the
-// connections' ratio tracking would be fine); light subpaths of infinite lights are not differentiated
-// (next-event estimation and emission found by camera subpaths are). Asked for explicitly, such scenes throw
-// a clear error; `auto` falls back to the unidirectional estimator.
+// Media: free flights along subpaths (delta tracking in heterogeneous media) and ratio tracking along
+// connections are re-evaluated on the moving segments from their records (render/flight_record.h).
+//
+// Limits: light subpaths of infinite lights are not differentiated (next-event estimation and emission found
+// by camera subpaths are). Asked for explicitly, such scenes throw a clear error; `auto` falls back to the
+// unidirectional estimator.
 #pragma once
 #include "diff/interior_media.h"
 

@@ -75,9 +75,11 @@ void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, 
             ++ctx.rays.rays;
             hit = c.scene.intersect(ray);
             const float tmax = hit.is_valid() ? hit.t : Infinity;
-            if (chain) chain->add(medium, travelled).bound = hit;
+            LegPiece* piece = chain ? &chain->add(medium, travelled) : nullptr;
+            if (piece) piece->bound = hit;
             if (medium) {
-                const FreeFlightSample ff = sample_free_flight(*medium, ray.o, ray.d, tmax, ctx.sampler);
+                const FreeFlightSample ff = sample_free_flight(*medium, ray.o, ray.d, tmax, ctx.sampler,
+                                                               piece ? &piece->record : nullptr);
                 beta *= ff.weight;
                 if (ff.event == FreeFlightSample::Event::Absorbed || is_black(beta)) return;
                 if (ff.event == FreeFlightSample::Event::Scattered) {
