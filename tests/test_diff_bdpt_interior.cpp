@@ -1,10 +1,12 @@
 // The bidirectional estimator of the interior term (paper 001 §7; src/diff/bdpt_interior.h) against central
-// finite differences of the bdpt renderer: a point light inside a homogeneous medium over a floor, with and
-// without a rough-glass sphere (a volumetric caustic that light subpaths find); derivatives w.r.t. σt, the
-// albedo, the HG g, a surface reflectance and the point light's translation (no occluder: the light's motion
-// moves no visibility edge, so the interior term is the whole derivative). Also: bidirectional and
-// unidirectional estimators agree, forward and reverse mode are adjoint, and the bidirectional derivative of
-// the caustic scene has a lower variance at equal samples.
+// finite differences of the bdpt renderer: a point light in or above a fog-filled box (homogeneous, or a
+// heterogeneous grid) over a floor, with and without a rough-glass sphere (a caustic that only light subpaths
+// find from a point light); derivatives w.r.t. σt, the albedo, the HG g, a grid's scale, a surface
+// reflectance and the point light's translation (no occluder: the light's motion moves no visibility edge, so
+// the interior term is the whole derivative), with image-space and material-form first vertices. Also:
+// bidirectional and unidirectional estimators agree (medium, floor and light motions), forward and reverse
+// mode are adjoint, and the bidirectional derivative of a small light's caustic has a lower variance at equal
+// samples.
 #include "diff_check.h"
 #include "media_test_util.h"
 #include "xml_test_util.h"
