@@ -1,6 +1,7 @@
 #include "diff/boundary_segment.h"
 
 #include "core/warp.h"
+#include "diff/interior_media.h"
 #include "diff/media_walk.h"
 #include "render/light_medium.h"
 #include "scene/shape_interaction.h"
@@ -279,8 +280,14 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext&
         out.receiver.p = x_d;
         out.cos_receiver = 1.f;
         out.dark_point = x_d + n * (1e-4f * (1.f + norm(x_d - x_b.p)));
-        out.velocity = sheet_velocity(source_t(), a_t, b_t, x_d, n, form.volume_motion().position(x_d, end.medium, nullptr));
-        out.velocity_seen = out.velocity;
+        const Vec3<Var> src_t = source_t();
+        out.velocity = sheet_velocity(src_t, a_t, b_t, x_d, n, form.volume_motion().position(x_d, end.medium, nullptr));
+        // Seen directly by the camera, the medium point is parameterized along the fixed camera ray.
+        out.velocity_seen =
+            form.image_space_first_vertex()
+                ? sheet_velocity(src_t, a_t, b_t, x_d, n,
+                                 seen_medium_point(scene, form, scene.sensor->to_world.apply_point(Vec3f(0.f)), x_d))
+                : out.velocity;
         out.valid = true;
         return out;
     }

@@ -74,4 +74,17 @@ Color3<Var> volumetric_camera_path(const Scene& scene, const MaterialForm& form,
     return L * along * Color3<Var>(ray_weight) * factor;
 }
 
+Vec3<Var> seen_medium_point(const Scene& scene, const MaterialForm& form, const Vec3f& camera, const Vec3f& x) {
+    const float dist = norm(x - camera);
+    const Vec3f d = (x - camera) / dist;
+    const Vec3<Var> o(camera), far(camera + d);
+    const SurfaceInteraction3f before = scene.intersect(Ray(x, d * -1.f, dist));
+    const SurfaceInteraction3f after = scene.intersect(Ray(x, d));
+    const Vec3<Var> start = before.is_valid() ? crossing_point(form, before, o, far) : o;
+    const float start0 = before.is_valid() ? dist - before.t : 0.f;
+    if (!after.is_valid()) return start + Vec3<Var>(d) * Var(dist - start0);
+    const Vec3<Var> stop = crossing_point(form, after, o, far);
+    return start + (stop - start) * Var((dist - start0) / (dist + after.t - start0));
+}
+
 } // namespace penumbra

@@ -24,4 +24,10 @@ Color3<Var> volumetric_camera_path(const Scene& scene, const MaterialForm& form,
                                    const Ray& ray, const Color3f& ray_weight, const CameraFactor& camera,
                                    float escaped_weight, const PathSettings& settings, RayCounter& rays);
 
+// The image-space parameterization of a medium point x seen by the pinhole at `camera` (the first vertex of
+// volumetric_camera_path): the point at x's fraction of its piece of the fixed camera ray, between the
+// moving surfaces around it (or the camera), on the tape. Boundary terms take the velocity of a medium
+// endpoint connected directly to the camera relative to it.
+Vec3<Var> seen_medium_point(const Scene& scene, const MaterialForm& form, const Vec3f& camera, const Vec3f& x);
+
 } // namespace penumbra
