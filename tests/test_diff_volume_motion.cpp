@@ -408,3 +408,59 @@ TEST(VolumeMotion, JacobianIsConsistentWithX) {
         EXPECT_GE(consistent, n * 9 / 10) << param << (fog_inside ? " (interior)" : " (shell)");
     }
 }
+
+// A point light translated inside the fog carries the medium near it (the shell around an octahedron at the
+// light, radius a quarter of its distance to the floor): X moves with the light there, is the identity beyond
+// the shell's box and in other media, and J's derivative stays bounded. Rotating the light moves no medium.
+TEST(VolumeMotion, TranslatedPointLightCarriesTheMediumNearIt) {
+    const Vec3f light(0.3f, 0.f, 0.2f); // 1.5 above the floor: the octahedron's radius is 0.375
+    const auto load = [&](const std::string& param) {
+        auto scene = load_scene_string(
+            test::scene(R"(<medium type="homogeneous" id="fog"><float name="sigma_t" value="0.3"/></medium>
+      <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,8" target="0,0,0" up="0,1,0"/>
+        </transform><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+      </sensor>
+      <shape type="cube" id="box"><transform name="to_world"><scale value="3"/></transform><bsdf type="null"/>
+        <ref name="interior" id="fog"/></shape>
+      <shape type="rectangle" id="floor"><transform name="to_world"><scale value="2.5"/><rotate x="1" angle="-90"/>
+        <translate value="0,-1.5,0"/></transform><bsdf type="diffuse"/></shape>
+      <emitter type="point" id="bulb"><point name="position" value="0.3,0,0.2"/>
+        <rgb name="intensity" value="1"/></emitter>)"),
+            ".");
+        auto params = std::make_unique<Parameters>(*scene);
+        params->enable({parse_param_selection(param)});
+        return std::pair{std::move(scene), std::move(params)};
+    };
+    EXPECT_TRUE(VolumeMotion(*load("bulb.rotate=0,1,0").first, *load("bulb.rotate=0,1,0").second).identity());
+    const auto [scene, params] = load("bulb.translate=1,0.5,0");
+    const VolumeMotion motion(*scene, *params);
+    ASSERT_FALSE(motion.identity());
+    const Medium* fog = scene->shapes[0]->interior.get();
+    const Vec3d d(1, 0.5, 0);
+    for (const Vec3f& offset : {Vec3f(0.f), Vec3f(0.1f, 0.f, 0.f), Vec3f(-0.05f, 0.08f, 0.1f)}) {
+        Tape::current().clear();
+        Var j;
+        const Vec3d dx = tangent(motion.position(light + offset, fog, &j), *params);
+        EXPECT_LT(norm(dx - d), 1e-3) << offset;
+        EXPECT_NEAR(tangent(j, *params), 0.0, 1e-3) << offset;
+    }
+    for (const Vec3f& offset : {Vec3f(0.f, 0.f, 1.f), Vec3f(-0.9f, 0.3f, 0.f), Vec3f(0.f, -1.f, 0.f)})
+        EXPECT_EQ(norm(tangent(motion.position(light + offset, fog, nullptr), *params)), 0.0) << offset;
+    EXPECT_EQ(norm(tangent(motion.position(light, nullptr, nullptr), *params)), 0.0);
+    // Between the octahedron and the box: a blend, and J's derivative is the field's divergence, of the order
+    // of the light's speed over the shell's width.
+    double largest = 0.0, blend = 0.0;
+    for (int i = 0; i < 60; ++i) {
+        Tape::current().clear();
+        const float a = 0.9f * float(i), r = 0.4f + 0.005f * float(i);
+        const Vec3f p = light + Vec3f(r * std::cos(a) * std::cos(0.3f * a),
+                                      r * std::sin(a) * std::cos(0.3f * a), r * std::sin(0.3f * a));
+        Var j;
+        blend = std::max(blend, norm(tangent(motion.position(p, fog, &j), *params)));
+        largest = std::max(largest, std::abs(tangent(j, *params)));
+    }
+    std::printf("  light shell: largest |dX/dθ| %.3f, largest |dJ/dθ| %.3f\n", blend, largest);
+    EXPECT_GT(blend, 0.05);
+    EXPECT_LT(blend, norm(d));
+    EXPECT_LT(largest, 4.0 * norm(d) / 0.375);
+}

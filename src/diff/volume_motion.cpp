@@ -7,6 +7,7 @@
 #include "scene/tet_mesh.h"
 
 #include <algorithm>
+#include <deque>
 #include <map>
 #include <tuple>
 
@@ -74,6 +75,7 @@ bool closed(const TriangleMesh& mesh) {
 struct VolumeMotion::Impl {
     std::map<const Medium*, std::vector<std::unique_ptr<VolumeRegion>>> regions;
     std::vector<std::string> omitted;
+    std::deque<std::vector<Motion>> light_motions; // the light regions' translations (stable addresses)
 };
 
 namespace {
@@ -140,12 +142,12 @@ std::unique_ptr<VolumeRegion> interior_region(const Scene& scene, const Shape& s
     return r;
 }
 
-// A box around the shape, as large as twice its bounding box, that meets no other shape's triangles: a face
-// of the box stops halfway to a triangle beyond it; a triangle beside the shape on no side (diagonally)
-// shrinks every face. Faces closer than a thousandth of the shape's size mean that the shape touches another.
-void shell_box(const Scene& scene, const Shape& shape, Vec3f& lo, Vec3f& hi) {
-    Vec3f slo, shi;
-    bounds(shape, slo, shi);
+// A box around the bounds [slo, shi] of a moving object (`self`: a shape, or null for a light's
+// pseudo-shape), as large as twice its bounding box, that meets no other shape's triangles: a face of the box
+// stops halfway to a triangle beyond it; a triangle beside the object on no side (diagonally) shrinks every
+// face. Faces closer than a thousandth of the object's size mean that it touches another shape.
+void shell_box(const Scene& scene, const Shape* self, const std::string& name, const Vec3f& slo,
+               const Vec3f& shi, Vec3f& lo, Vec3f& hi) {
     const Vec3f extent = shi - slo;
     const float smallest = 1e-3f * norm(extent);
     Vec3f below(0.5f * std::max({extent.x, extent.y, extent.z})), above = below; // the margins
@@ -156,7 +158,7 @@ void shell_box(const Scene& scene, const Shape& shape, Vec3f& lo, Vec3f& hi) {
         const Vec3f center = (lo + hi) * 0.5f, half = (hi - lo) * 0.5f;
         bool free = true;
         for (const auto& other : scene.shapes) {
-            if (other.get() == &shape) continue;
+            if (other.get() == self) continue;
             const auto& m = other->mesh;
             for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
                 const Vec3f a = m.positions[m.indices[t]], b = m.positions[m.indices[t + 1]],
@@ -164,7 +166,7 @@ void shell_box(const Scene& scene, const Shape& shape, Vec3f& lo, Vec3f& hi) {
                 if (!triangle_overlaps_box(a, b, c, center, half)) continue;
                 free = false;
                 obstacle = other.get();
-                // The side with the widest gap between the triangle and the shape's bounding box.
+                // The side with the widest gap between the triangle and the object's bounding box.
                 const Vec3f tlo = min(a, min(b, c)), thi = max(a, max(b, c));
                 int axis = -1;
                 bool upper = false;
@@ -188,19 +190,29 @@ void shell_box(const Scene& scene, const Shape& shape, Vec3f& lo, Vec3f& hi) {
         if (std::min({below.x, below.y, below.z, above.x, above.y, above.z}) < smallest) break;
     }
     throw Error(
-        shape_label(scene, shape) + " touches another shape (" + shape_label(scene, *obstacle) +
+        name + " touches another shape (" + shape_label(scene, *obstacle) +
         "): no box around it is free of other shapes, so the medium around it cannot be moved with it "
         "(leave a gap between the moving shape and its neighbors)");
 }
 
-std::unique_ptr<VolumeRegion> shell_region(const Scene& scene, const Shape& shape, const Parameters& params) {
+// The shell between a moving triangle soup (a shape's mesh, or a light's pseudo-shape; `shape` set only for
+// a shape) and a box around it: the motions on the soup's vertices, zero on the box, harmonic in between.
+std::unique_ptr<VolumeRegion> shell_region(const Scene& scene, const Shape* shape, const std::string& name,
+                                           const std::vector<Vec3f>& soup,
+                                           const std::vector<uint32_t>& faces_in,
+                                           const std::vector<Motion>& motions) {
     auto r = std::make_unique<VolumeRegion>();
-    r->shape = &shape;
-    r->motions = &params.motions(&shape);
-    r->vertex_positions = shape.vertex_index() >= 0;
-    shell_box(scene, shape, r->lo, r->hi);
-    std::vector<Vec3f> positions = shape.mesh.positions;
-    std::vector<uint32_t> indices = shape.mesh.indices;
+    r->shape = shape;
+    r->motions = &motions;
+    r->vertex_positions = shape && shape->vertex_index() >= 0;
+    Vec3f slo(Infinity), shi(-Infinity);
+    for (const Vec3f& p : soup) {
+        slo = min(slo, p);
+        shi = max(shi, p);
+    }
+    shell_box(scene, shape, name, slo, shi, r->lo, r->hi);
+    std::vector<Vec3f> positions = soup;
+    std::vector<uint32_t> indices = faces_in;
     const uint32_t base = uint32_t(positions.size());
     for (int c = 0; c < 8; ++c)
         positions.emplace_back(c & 1 ? r->hi.x : r->lo.x, c & 2 ? r->hi.y : r->lo.y,
@@ -211,10 +223,8 @@ std::unique_ptr<VolumeRegion> shell_region(const Scene& scene, const Shape& shap
     for (const auto& f : faces)
         for (const uint32_t c : {f[0], f[1], f[2], f[0], f[2], f[3]})
             indices.push_back(base + c);
-    // A lattice of free points between the shape's bounding box and the box (6 steps across), so that the
+    // A lattice of free points between the soup's bounding box and the box (6 steps across), so that the
     // shell's tets are not long slivers from the surface to the box's corners.
-    Vec3f slo, shi;
-    bounds(shape, slo, shi);
     const Vec3f step = (r->hi - r->lo) / 6.f;
     for (int z = 1; z < 6; ++z)
         for (int y = 1; y < 6; ++y)
@@ -223,10 +233,64 @@ std::unique_ptr<VolumeRegion> shell_region(const Scene& scene, const Shape& shap
                 const Vec3f gap = max(slo - p, p - shi) / step;
                 if (std::max({gap.x, gap.y, gap.z}) > 0.5f) positions.push_back(p);
             }
-    r->mesh = tetrahedralize(positions, indices, "the medium around " + shape_label(scene, shape));
+    r->mesh = tetrahedralize(positions, indices, "the medium around " + name);
     r->locator = std::make_unique<TetLocator>(r->mesh);
-    r->interpolate(shape_vertices_of(r->mesh, shape.mesh.positions.size()), base + 8, true);
+    r->interpolate(shape_vertices_of(r->mesh, soup.size()), base + 8, true);
     return r;
+}
+
+// The distance from p to the triangle abc (the closest point by its Voronoi regions, Ericson §5.1.5).
+float triangle_distance(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
+    const Vec3f ab = b - a, ac = c - a, ap = p - a;
+    const float d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0.f && d2 <= 0.f) return norm(ap);
+    const Vec3f bp = p - b;
+    const float d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0.f && d4 <= d3) return norm(bp);
+    const float vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.f && d1 >= 0.f && d3 <= 0.f) return norm(ap - ab * (d1 / (d1 - d3)));
+    const Vec3f cp = p - c;
+    const float d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0.f && d5 <= d6) return norm(cp);
+    const float vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.f && d2 >= 0.f && d6 <= 0.f) return norm(ap - ac * (d2 / (d2 - d6)));
+    const float va = d3 * d6 - d5 * d4;
+    if (va <= 0.f && d4 - d3 >= 0.f && d5 - d6 >= 0.f)
+        return norm(bp - (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
+    const float denom = 1.f / (va + vb + vc);
+    return norm(ap - ab * (vb * denom) - ac * (vc * denom));
+}
+
+// The medium near a translated point light carried with it (paper 001 §6.1: X is any smooth motion
+// consistent with the moving geometry), so that the connection distance to vertices near the light does not
+// change and the 1/ℓ³ derivative of I/ℓ² never meets small ℓ: a shell around an octahedron centred at the
+// light (a quarter of the distance to the nearest surface), whose vertices translate with the light.
+std::unique_ptr<VolumeRegion> light_region(const Scene& scene, const Vec3f& light, const std::string& name,
+                                           const std::vector<Motion>& translations) {
+    float nearest = Infinity;
+    for (const auto& shape : scene.shapes) {
+        const auto& m = shape->mesh;
+        for (size_t t = 0; t + 2 < m.indices.size(); t += 3)
+            nearest = std::min(nearest, triangle_distance(light, m.positions[m.indices[t]],
+                                                          m.positions[m.indices[t + 1]],
+                                                          m.positions[m.indices[t + 2]]));
+    }
+    if (!(nearest < Infinity) || nearest <= 0.f)
+        throw Error(name + " lies on a surface: its medium cannot move with it");
+    const float radius = 0.25f * nearest;
+    std::vector<Vec3f> octahedron;
+    for (int k = 0; k < 6; ++k) {
+        Vec3f offset(0.f);
+        offset[k / 2] = k % 2 ? -radius : radius;
+        octahedron.push_back(light + offset);
+    }
+    std::vector<uint32_t> faces;
+    for (const uint32_t x : {0u, 1u})
+        for (const uint32_t y : {2u, 3u})
+            for (const uint32_t z : {4u, 5u})
+                for (const uint32_t v : {x, y, z})
+                    faces.push_back(v);
+    return shell_region(scene, nullptr, name, octahedron, faces, translations);
 }
 
 } // namespace
@@ -240,13 +304,33 @@ VolumeMotion::VolumeMotion(const Scene& scene, const Parameters& params) : impl_
             // The same medium on both sides: the shell's tets fill the shape too.
             if (shape->interior && shape->interior.get() != around)
                 impl_->regions[shape->interior.get()].push_back(interior_region(scene, *shape, params));
-            if (around) impl_->regions[around].push_back(shell_region(scene, *shape, params));
+            if (around)
+                impl_->regions[around].push_back(shell_region(scene, shape.get(), shape_label(scene, *shape),
+                                                              shape->mesh.positions, shape->mesh.indices,
+                                                              params.motions(shape.get())));
         } catch (const Error& e) {
             // Reverse mode enables every vertex_positions: a shape that cannot carry its media is reported,
             // not fatal; a selected motion is.
             if (!params.motions(shape.get()).empty()) throw;
             impl_->omitted.push_back(e.what());
         }
+    }
+    // Point and spot lights translated inside a medium; rotations about their position move no medium.
+    for (size_t i = 0; i < scene.emitters.size(); ++i) {
+        const Emitter& emitter = *scene.emitters[i];
+        if (!(emitter.flags() & EmitterDeltaPosition)) continue;
+        std::vector<Motion> translations;
+        for (const Motion& m : params.emitter_motions(&emitter))
+            if (m.kind == Parameter::Kind::Translate) translations.push_back(m);
+        if (translations.empty()) continue;
+        const Vec3f light = emitter.sample_ray(Vec2f(0.5f), Vec2f(0.5f)).first.o;
+        RayCounter rays;
+        const Medium* medium = emitter_medium(scene, emitter, light, rays);
+        if (!medium) continue;
+        const std::string name =
+            "emitter '" + (emitter.id.empty() ? "emitter_" + std::to_string(i) : emitter.id) + "'";
+        impl_->light_motions.push_back(std::move(translations));
+        impl_->regions[medium].push_back(light_region(scene, light, name, impl_->light_motions.back()));
     }
 }
 

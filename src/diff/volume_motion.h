@@ -14,6 +14,11 @@
 //    short of other shapes' triangles), the shape's motion on its surface, zero on the box, harmonic in
 //    between (Gauss-Seidel sweeps of the graph Laplacian); the identity outside the box. Open meshes (thin
 //    sheets) work too. A shape touching another has no such box: Error.
+// For each point or spot light translated inside a medium: the same shell around an octahedron centred at
+// the light (radius a quarter of its distance to the nearest surface, filled by the shell's tets), whose
+// vertices translate with the light, so that medium points near the light keep their distance to it (the
+// derivative of the connection's 1/ℓ² would otherwise have infinite variance there). Rotating a light about
+// its position moves no medium.
 // Moving a medium's container with other shapes inside it is refused (Error).
 #pragma once
 #include "core/var.h"
