@@ -176,8 +176,12 @@ TEST(CLI, BundledMediaScene) {
               std::string::npos)
         << path.output;
     const fs::path d = dir / "d.exr";
-    const Result deriv = run("derivative " + hazy + " --param glass.translate=1,0,0 -o " + d.string() + small);
-    EXPECT_EQ(deriv.status, 1) << deriv.output;
-    EXPECT_NE(deriv.output.find("participating media"), std::string::npos) << deriv.output;
-    EXPECT_FALSE(fs::exists(d));
+    const Result deriv = run("derivative " + hazy + " --param haze.sigma_t -o " + d.string() + small);
+    EXPECT_EQ(deriv.status, 0) << deriv.output;
+    EXPECT_TRUE(fs::exists(d));
+    const fs::path p = dir / "p.exr";
+    const Result paths = run("derivative " + hazy + " --method paths --param haze.sigma_t -o " + p.string() + small);
+    EXPECT_EQ(paths.status, 1) << paths.output;
+    EXPECT_NE(paths.output.find("participating media"), std::string::npos) << paths.output;
+    EXPECT_FALSE(fs::exists(p));
 }

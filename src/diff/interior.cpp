@@ -3,9 +3,11 @@
 #include "core/batch_stats.h"
 #include "core/interrupt.h"
 #include "core/stratified.h"
+#include "diff/interior_media.h"
 #include "diff/material_form.h"
 #include "render/light_medium.h"
 #include "render/path.h"
+#include "render/volpath.h"
 #include "render/tiles.h"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -16,6 +18,7 @@ namespace penumbra {
 
 PathSettings path_settings(const Scene& scene) {
     if (const auto* path = dynamic_cast<const PathIntegrator*>(scene.integrator.get())) return path->settings();
+    if (const auto* volpath = dynamic_cast<const VolPathIntegrator*>(scene.integrator.get())) return volpath->settings();
     return PathSettings{};
 }
 
@@ -44,11 +47,12 @@ FilmSample sample_film(const ReconstructionFilter& filter, Sampler& sampler, boo
 // importance sampling, as the renderer does (stratified over the pixel's samples), and its ray stays fixed;
 // x1(θ) slides along it with the surface (MaterialForm::ray_vertex). The camera factor W_j / p is the renderer's sample weight, independent of θ.
 Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sampler& sampler, int x, int y,
-                               const PixelStratum& stratum, const PathSettings& settings, RayCounter& rays) {
+                               const PixelStratum& stratum, bool media, const PathSettings& settings, RayCounter& rays) {
     const Sensor& sensor = *scene.sensor;
     const Vec2f pos = sensor.film->sample_position(x, y, stratum(sampler.next_2d()));
     const auto [ray, ray_weight] = sensor.sample_ray(pos, sampler.next_2d());
     ++rays.rays;
+    if (media) return volumetric_camera_path(scene, form, sampler, ray, ray_weight, {}, 1.f, settings, rays);
     const SurfaceInteraction3f first = scene.intersect(ray);
     if (!first.is_valid())
         return settings.hide_emitters ? Color3<Var>(Var(0.f))
@@ -62,14 +66,30 @@ Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sam
 // W_j / p = P_j(s(θ)) |ds/dA|(θ) J(p1) / (p_s |ds/dA|(θ0)) (the pinhole importance of Eqs. 22-23 written on the
 // film, P_j the normalized reconstruction filter of pixel j, s the projection of x1).
 Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sampler& sampler, int x, int y,
-                                const PixelStratum& stratum, bool mirror, const PathSettings& settings, RayCounter& rays) {
-    if (form.image_space_first_vertex()) return sample_image_space(scene, form, sampler, x, y, stratum, settings, rays);
+                                const PixelStratum& stratum, bool mirror, bool media, const PathSettings& settings,
+                                RayCounter& rays) {
+    if (form.image_space_first_vertex())
+        return sample_image_space(scene, form, sampler, x, y, stratum, media, settings, rays);
     const Sensor& sensor = *scene.sensor;
     const ReconstructionFilter& filter = *sensor.film->rfilter;
     const FilmSample fs = sample_film(filter, sampler, mirror);
     const Vec2f center(x + 0.5f, y + 0.5f);
     const auto [ray, ray_weight] = sensor.sample_ray(center + fs.offset, sampler.next_2d());
     ++rays.rays;
+    const Vec3f camera = sensor.to_world.apply_point(Vec3f(0.f));
+    if (media) {
+        // W_j / p = P_j(s(θ)) |ds/dA|(θ) J / (p_s |ds/dA|(θ0)); a medium vertex's |ds/dA| has the normal
+        // toward the camera (|ds/dω| / ℓ², the volume measure).
+        const CameraFactor factor = [&](const Vec3<Var>& p, const Vec3<Var>& n, const Var& jacobian) {
+            const Vec3<Var> p_cam = form.to_reference_camera(p, camera);
+            Vec2<Var> s;
+            Var film_jacobian;
+            if (!sensor.film_position(p_cam, form.direction_to_reference_camera(n), s, film_jacobian)) return Var(0.f);
+            return sensor.film->filter_weight(x, y, s) * relative_change(film_jacobian * jacobian) / Var(fs.pdf);
+        };
+        return volumetric_camera_path(scene, form, sampler, ray, ray_weight, factor,
+                                      sensor.film->filter_weight(x, y, center + fs.offset) / fs.pdf, settings, rays);
+    }
     const SurfaceInteraction3f first = scene.intersect(ray);
     if (!first.is_valid()) {
         // The environment seen through the film is a direction: only its own rotation changes it.
@@ -79,7 +99,6 @@ Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sa
     }
 
     SurfaceInteraction<Var> x1 = form.vertex(first);
-    const Vec3f camera = sensor.to_world.apply_point(Vec3f(0.f));
     const Vec3<Var> p_cam = form.to_reference_camera(x1.p, camera);
     const Vec3<Var> n_cam = form.direction_to_reference_camera(x1.n);
     Vec2<Var> s;
@@ -107,6 +126,7 @@ PixelSums forward_batch(const Scene& scene, const Parameters& params, const Diff
     PixelSums out{Image(film.width, film.height), Image(film.width, film.height)};
     const MaterialForm form(scene, params, options.first_vertex);
     const bool antithetic = options.antithetic && !form.image_space_first_vertex();
+    const bool media = scene_has_media(scene);
     const PathSettings settings = options.path;
     for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
         Sampler sampler(*scene.sensor->sampler, antithetic ? (options.spp + 1) / 2 : options.spp);
@@ -124,7 +144,7 @@ PixelSums forward_batch(const Scene& scene, const Parameters& params, const Diff
                     sampler.start(seed, pixel, uint64_t(antithetic ? m / 2 : m));
                     tape.clear();
                     const PixelStratum stratum(m, options.spp, seed, pixel);
-                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, settings, rays);
+                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, media, settings, rays);
                     tape_nodes += tape.size();
                     if (!finite(c)) continue;
                     tape.forward(params.direction().data(), tangent);
@@ -144,15 +164,14 @@ PixelSums forward_batch(const Scene& scene, const Parameters& params, const Diff
 void check_ready(const Scene& scene, const Parameters& params) {
     if (params.dimension() == 0) throw Error("no parameter is enabled for differentiation");
     if (!scene.sensor || !scene.sensor->film) throw Error("the scene has no sensor");
-    require_no_media(scene);
 }
 
 } // namespace
 
 void require_no_media(const Scene& scene) {
     if (scene_has_media(scene))
-        throw Error("the scene has participating media, which the derivative methods do not differentiate yet: "
-                    "render it with volpath, volpathmis or bdpt");
+        throw Error("the scene has participating media, which this method does not differentiate: use the psdr "
+                    "method (the default)");
 }
 
 DerivativeImage render_derivative(const Scene& scene, const Parameters& params, const DiffOptions& options) {
@@ -185,6 +204,7 @@ Gradient render_gradient(const Scene& scene, const Parameters& params, const Ima
     const auto start = std::chrono::steady_clock::now();
     const MaterialForm form(scene, params, options.first_vertex);
     const bool antithetic = options.antithetic && !form.image_space_first_vertex();
+    const bool media = scene_has_media(scene);
     const size_t dim = size_t(params.dimension());
     tbb::enumerable_thread_specific<std::vector<double>> gradients([dim] { return std::vector<double>(dim, 0.0); });
     Gradient result{std::vector<double>(dim, 0.0), Image(film.width, film.height), 0.0, {}};
@@ -210,7 +230,7 @@ Gradient render_gradient(const Scene& scene, const Parameters& params, const Ima
                     sampler.start(options.seed, pixel, uint64_t(antithetic ? m / 2 : m));
                     tape.clear();
                     const PixelStratum stratum(m, options.spp, options.seed, pixel);
-                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, options.path, rays);
+                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, media, options.path, rays);
                     tape_nodes += tape.size();
                     if (!finite(c)) continue;
                     primal += Vec3d(c.x.v, c.y.v, c.z.v);

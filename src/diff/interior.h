@@ -40,10 +40,10 @@ struct Gradient {
     SampleCost cost;
 };
 
-// Path settings from the scene's `path` integrator (defaults otherwise).
+// Path settings from the scene's `path` or `volpath` integrator (defaults otherwise).
 PathSettings path_settings(const Scene& scene);
 
-// Throws a clear Error for scenes with participating media (the differentiable estimators trace surfaces only).
+// Throws a clear Error for scenes with participating media (for methods that trace surfaces only).
 void require_no_media(const Scene& scene);
 DerivativeImage render_derivative(const Scene& scene, const Parameters& params, const DiffOptions& options);
 // `adjoint` has the film's size: ∂L/∂I per pixel and channel.

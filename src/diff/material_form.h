@@ -5,6 +5,7 @@
 #pragma once
 #include "diff/first_vertex.h"
 #include "diff/parameters.h"
+#include "diff/volume_motion.h"
 #include "scene/shape_interaction.h"
 
 #include <type_traits>
@@ -77,7 +78,8 @@ private:
 class MaterialForm {
 public:
     MaterialForm(const Scene& scene, const Parameters& params, FirstVertex first_vertex)
-        : params_(params), image_space_first_vertex_(penumbra::image_space_first_vertex(scene, params, first_vertex)) {}
+        : params_(params), image_space_first_vertex_(penumbra::image_space_first_vertex(scene, params, first_vertex)),
+          volume_motion_(scene, params) {}
 
     // Whether the first path vertex is parameterized by its (fixed) camera ray instead of its material point.
     bool image_space_first_vertex() const { return image_space_first_vertex_; }
@@ -103,6 +105,18 @@ public:
     }
     // A vertex of a shape at X(p, θ).
     Vec3<Var> position(const Shape& shape, uint32_t v) const { return vertices(shape).position(v); }
+    // A medium vertex x = X(p, θ) of `medium` with its volume Jacobian dV(x)/dV(p) (Eq. 46).
+    Vec3<Var> medium_vertex(const Vec3f& p, const Medium* medium, Var& jacobian) const {
+        return volume_motion_.position(p, medium, &jacobian);
+    }
+    const VolumeMotion& volume_motion() const { return volume_motion_; }
+    // The camera's center of projection as it moves.
+    Vec3<Var> camera_position(const Vec3f& camera) const {
+        Vec3<Var> y(camera);
+        for (const Motion& m : params_.sensor_motions())
+            if (m.kind == Parameter::Kind::Translate) y += Vec3<Var>(m.vector) * Var::parameter(0.f, m.index);
+        return y;
+    }
     // J(p) = |(x1 - x0) × (x2 - x0)| / |(p1 - p0) × (p2 - p0)| for the triangle of `hit` (exact: X is affine on it).
     Var jacobian(const SurfaceInteraction3f& hit) const {
         const MovedVertices moved = vertices(*hit.shape);
@@ -188,6 +202,7 @@ private:
     MovedVertices vertices(const Shape& shape) const { return {shape, params_.motions(&shape)}; }
     const Parameters& params_;
     bool image_space_first_vertex_;
+    VolumeMotion volume_motion_;
 };
 
 } // namespace penumbra

@@ -74,7 +74,6 @@ private:
 } // namespace
 
 PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, const PsdrOptions& options) {
-    require_no_media(scene);
     require_pinhole_terms(scene, params, options);
     PsdrDerivative out;
     const Film& film = *scene.sensor->film;
@@ -121,7 +120,6 @@ PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, con
 
 Gradient psdr_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const PsdrOptions& options) {
     const auto start = std::chrono::steady_clock::now();
-    require_no_media(scene);
     require_pinhole_terms(scene, params, options);
     Gradient g;
     if (options.interior.spp > 0) g = render_gradient(scene, params, adjoint, options.interior);

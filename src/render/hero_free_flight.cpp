@@ -14,7 +14,7 @@ Color3f infinite_transmittance(const Color3f& sigma_t) {
 }
 
 HeroFreeFlight sample_homogeneous(const Medium& medium, const Vec3f& o, const Vec3f& d, float tmax, int hero,
-                                  Sampler& sampler) {
+                                  Sampler& sampler, FlightRecord* record) {
     HeroFreeFlight s;
     const Color3f sigma_t = medium.sigma_t(o);
     const float sc = sigma_t[hero];
@@ -33,20 +33,23 @@ HeroFreeFlight sample_homogeneous(const Medium& medium, const Vec3f& o, const Ve
         s.p = o + d * t;
         s.weight = tr * sigma_t * medium.albedo(s.p) / pdf;
         s.ratio = tr * sigma_t / pdf;
+        if (record) record->reset(t), record->pdf = pdf;
         return s;
     }
     // Passing the segment: probability Tr_i(tmax) under channel i, the integrand has Tr(tmax). Tr_c > 0 here.
     const Color3f tr = std::isinf(tmax) ? infinite_transmittance(sigma_t) : exp_neg(sigma_t * tmax);
     s.weight = s.ratio = tr / tr[hero];
+    if (record) record->reset(tmax), record->pdf = tr[hero];
     return s;
 }
 
 } // namespace
 
 HeroFreeFlight sample_free_flight_hero(const Medium& medium, const Vec3f& o, const Vec3f& d, float tmax,
-                                       int hero, Sampler& sampler) {
-    if (medium.is_homogeneous()) return sample_homogeneous(medium, o, d, tmax, hero, sampler);
+                                       int hero, Sampler& sampler, FlightRecord* record) {
+    if (medium.is_homogeneous()) return sample_homogeneous(medium, o, d, tmax, hero, sampler, record);
     HeroFreeFlight s;
+    if (record) record->reset(tmax);
     for_each_tentative_collision(medium, o, d, tmax, sampler, [&](float t, const Vec3f& p, float m) {
         const Color3f sigma_t = medium.sigma_t(p);
         const Color3f sigma_s = sigma_t * medium.albedo(p);
@@ -65,6 +68,7 @@ HeroFreeFlight sample_free_flight_hero(const Medium& medium, const Vec3f& o, con
             s.p = p;
             s.weight *= sigma_s / sigma_s[hero];
             s.ratio *= sigma_s / sigma_s[hero];
+            if (record) record->length = t, record->real_majorant = m, record->real_probability = sigma_s[hero] / m;
             return false;
         }
         if (!(sigma_n[hero] > 0.f)) { // rounding put u past sigma_t,c = m: treat as absorbed
@@ -74,6 +78,7 @@ HeroFreeFlight sample_free_flight_hero(const Medium& medium, const Vec3f& o, con
         }
         s.weight *= sigma_n / sigma_n[hero];
         s.ratio *= sigma_n / sigma_n[hero];
+        if (record) record->collisions.push_back({t, m, sigma_n[hero] / m});
         return true;
     });
     return s;

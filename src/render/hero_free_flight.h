@@ -26,8 +26,9 @@ struct HeroFreeFlight {
 };
 
 // Samples where a ray (origin o, unit direction d) in `medium` first scatters within [0, tmax), driven by
-// channel `hero` (0, 1 or 2).
+// channel `hero` (0, 1 or 2). `record` (optional) keeps the events for re-evaluation on a moving leg
+// (render/flight_record.h: its densities and probabilities are the hero channel's).
 HeroFreeFlight sample_free_flight_hero(const Medium& medium, const Vec3f& o, const Vec3f& d, float tmax,
-                                       int hero, Sampler& sampler);
+                                       int hero, Sampler& sampler, FlightRecord* record = nullptr);
 
 } // namespace penumbra

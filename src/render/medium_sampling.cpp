@@ -88,7 +88,9 @@ FreeFlightSample sample_free_flight(const Medium& medium, const Vec3f& o, const 
 // Ratio tracking (Novák et al. 2014): the product of (1 - sigma_t/m) over tentative collisions, with Russian
 // roulette once every channel's running estimate is below 0.1 (unbiased: survivors are divided by the
 // survival probability).
-Color3f transmittance(const Medium& medium, const Vec3f& o, const Vec3f& d, float tmax, Sampler& sampler) {
+Color3f transmittance(const Medium& medium, const Vec3f& o, const Vec3f& d, float tmax, Sampler& sampler,
+                      FlightRecord* record) {
+    if (record) record->reset(tmax);
     if (medium.is_homogeneous()) {
         const Color3f sigma_t = medium.sigma_t(o);
         if (std::isinf(tmax))
@@ -96,16 +98,19 @@ Color3f transmittance(const Medium& medium, const Vec3f& o, const Vec3f& d, floa
         return exp_neg(sigma_t * tmax);
     }
     Color3f tr(1.f);
-    for_each_tentative_collision(medium, o, d, tmax, sampler, [&](float, const Vec3f& p, float m) {
+    for_each_tentative_collision(medium, o, d, tmax, sampler, [&](float t, const Vec3f& p, float m) {
         tr *= Color3f(1.f) - medium.sigma_t(p) / m;
         const float q = max_component(tr);
+        float survival = 1.f;
         if (q < 0.1f) {
             if (!(q > 0.f) || sampler.next_1d() >= q) {
                 tr = Color3f(0.f);
                 return false;
             }
             tr /= q;
+            survival = q;
         }
+        if (record) record->collisions.push_back({t, m, survival});
         return true;
     });
     return tr;

@@ -10,6 +10,7 @@
 // grey majorant, so every channel shares the collision density and the channel choice is not needed.
 #pragma once
 #include "core/sampler.h"
+#include "render/flight_record.h"
 #include "scene/medium.h"
 
 #include <cmath>
@@ -52,7 +53,9 @@ FreeFlightSample sample_free_flight(const Medium& medium, const Vec3f& o, const 
 
 // An unbiased estimate of the per-channel transmittance exp(-∫_0^tmax sigma_t) along o + t d (exact for
 // homogeneous media; ratio tracking otherwise).
-Color3f transmittance(const Medium& medium, const Vec3f& o, const Vec3f& d, float tmax, Sampler& sampler);
+// homogeneous; ratio tracking otherwise). `record` (optional) keeps the collisions (render/flight_record.h).
+Color3f transmittance(const Medium& medium, const Vec3f& o, const Vec3f& d, float tmax, Sampler& sampler,
+                      FlightRecord* record = nullptr);
 
 // A deterministic density of the free-flight outcome for MIS weights (bidirectional estimators): the
 // channel-averaged density of scattering at distance t (scattered) or of passing a segment of length t (not

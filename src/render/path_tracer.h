@@ -33,41 +33,67 @@ template <typename T> inline T relative_change(const T& v) {
 struct ReferenceGeometry {
     const SurfaceInteraction3f& vertex(const SurfaceInteraction3f& hit) const { return hit; }
     float jacobian(const SurfaceInteraction3f&) const { return 1.f; }
+    Vec3f position(const Shape& shape, uint32_t v) const { return shape.mesh.positions[v]; }
+    Vec3f medium_vertex(const Vec3f& p, const Medium*, float& jacobian) const { return jacobian = 1.f, p; }
+    Vec3f light_position(const Emitter&, const Vec3f& p) const { return p; }
+    Vec3f light_direction(const Emitter&, const Vec3f& d) const { return d; }
+    Vec3f to_reference_light(const Emitter&, const Vec3f& x) const { return x; }
+    Vec3f direction_to_reference_light(const Emitter&, const Vec3f& d) const { return d; }
 };
+
+// The emitter's side of a next-event connection from x in material form (T = Var): the unit direction wo
+// from x toward the light and the factor L_e G' J / (p_σ G'_0) of an area light at material point y, the
+// incident term I / p of a point, spot or directional light (Eq. 24, evaluated on the reference light at x
+// moved by the light's inverse motion; toward a point light the direction moves with x and with the light, a
+// directional light's turns with it), or the environment's radiance along the fixed direction over p.
+// `light` receives the light's point (area and point lights) for the visibility of the connection.
+template <typename T> struct EmitterConnection {
+    Vec3<T> wo;
+    Color3<T> value;
+    Vec3<T> light;
+    bool finite = false; // the connection ends at `light`
+};
+
+template <typename T, typename Geometry>
+EmitterConnection<T> emitter_connection(const DirectionSample3f& ds, const Vec3<T>& x, const Geometry& geometry) {
+    using std::abs;
+    using std::sqrt;
+    const Emitter* emitter = ds.emitter;
+    EmitterConnection<T> c;
+    if (const Shape* shape = emitter->shape()) {
+        const SurfaceInteraction3f light_hit =
+            surface_interaction<float>(*shape, ds.prim, ds.bary, MeshVertices{shape->mesh});
+        SurfaceInteraction<T> y = geometry.vertex(light_hit);
+        const Vec3<T> to_light = y.p - x;
+        const T dist2 = squared_norm(to_light);
+        c.wo = to_light / sqrt(dist2);
+        y.wi = y.to_local(-c.wo);
+        const T g = abs(dot(y.n, c.wo)) / dist2;
+        c.value = emitter->eval(y) * (relative_change(g * geometry.jacobian(light_hit)) / T(ds.pdf));
+        c.light = y.p;
+        c.finite = true;
+    } else if (emitter->is_delta()) {
+        if (emitter->is_infinite()) {
+            c.wo = geometry.light_direction(*emitter, ds.d);
+        } else {
+            c.light = geometry.light_position(*emitter, ds.p);
+            c.wo = normalize(c.light - x);
+            c.finite = true;
+        }
+        c.value = emitter->eval_delta(geometry.to_reference_light(*emitter, x)) / T(ds.pdf);
+    } else {
+        c.wo = Vec3<T>(ds.d);
+        c.value = emitter->eval_environment(geometry.direction_to_reference_light(*emitter, ds.d)) / T(ds.pdf);
+    }
+    return c;
+}
 
 // Next-event contribution f_s L_e / p at x in material form (T = Var), for the emitter sample ds.
 template <typename T, typename Geometry>
 Color3<T> next_event_contribution(const BSDFContext& ctx, const BSDF* bsdf, const SurfaceInteraction<T>& si,
                                   const DirectionSample3f& ds, const Geometry& geometry) {
-    using std::abs;
-    using std::sqrt;
-    const Emitter* emitter = ds.emitter;
-    if (const Shape* shape = emitter->shape()) {
-        // Area light at material point y: f_s L_e G'(x, y) J(y) / (p_σ G'_0).
-        const SurfaceInteraction3f light_hit =
-            surface_interaction<float>(*shape, ds.prim, ds.bary, MeshVertices{shape->mesh});
-        SurfaceInteraction<T> y = geometry.vertex(light_hit);
-        const Vec3<T> to_light = y.p - si.p;
-        const T dist2 = squared_norm(to_light);
-        const Vec3<T> wo = to_light / sqrt(dist2);
-        y.wi = y.to_local(-wo);
-        const T g = abs(dot(y.n, wo)) / dist2;
-        return bsdf->eval(ctx, si, si.to_local(wo)) * emitter->eval(y) *
-               (relative_change(g * geometry.jacobian(light_hit)) / T(ds.pdf));
-    }
-    if (emitter->is_delta()) {
-        // Point, spot, directional: f_s times the emitter's incident term at x (Eq. 24), evaluated on the
-        // reference light at x moved by the light's inverse motion; toward a point light the direction moves
-        // with x and with the light, a directional light's turns with it.
-        const Vec3<T> to_light = emitter->is_infinite()
-                                     ? geometry.light_direction(*emitter, ds.d)
-                                     : normalize(geometry.light_position(*emitter, ds.p) - si.p);
-        return bsdf->eval(ctx, si, si.to_local(to_light)) *
-               emitter->eval_delta(geometry.to_reference_light(*emitter, si.p)) / T(ds.pdf);
-    }
-    // Environment: a fixed direction, along which the (possibly rotating) environment is looked up.
-    return bsdf->eval(ctx, si, si.to_local(Vec3<T>(ds.d))) *
-           emitter->eval_environment(geometry.direction_to_reference_light(*emitter, ds.d)) / T(ds.pdf);
+    const EmitterConnection<T> c = emitter_connection(ds, si.p, geometry);
+    return bsdf->eval(ctx, si, si.to_local(c.wo)) * c.value;
 }
 
 // Radiance leaving the first vertex of a path toward the sensor, estimated along one sampled path. `first` is

@@ -1,0 +1,89 @@
+// What a free flight or a transmittance estimate drew along one straight leg of a path, kept so that the
+// same estimate can be re-evaluated on the moving leg of the material form (paper 001 §4.1, §6.2): the events
+// are sampled once, detached, in the reference configuration; their weights are functions of θ.
+//
+// Tentative collisions are drawn at reference distances t along a leg of reference length ℓ0. On the moving
+// leg a(θ) → b(θ) of length ℓ(θ) they sit at the same fractions t/ℓ0, i.e. they form a Poisson process of
+// rate μ ℓ0/ℓ per unit length, so that
+//   ratio tracking    Tr(θ) ≈ Π_j (1 − σt(y_j(θ)) ℓ/(μ ℓ0))                  (unbiased for every θ),
+//   delta tracking    Tr(θ) σs(x(θ)) / p ≈ Π_j (μ − σt(y_j) ℓ/ℓ0) / (μ P_null,j) · σs(x) / (μ P_real)
+// (the null-collision form of Miller et al. 2019 with detached event probabilities P); at θ0 these are the
+// weights the samplers use. Homogeneous media keep the closed forms exp(−σt ℓ(θ)) over the detached density.
+// The change of measure of the vertex itself, ℓ0²/ℓ² · J, is the caller's.
+#pragma once
+#include "scene/medium.h"
+
+#include <vector>
+
+namespace penumbra {
+
+struct FlightRecord {
+    struct Collision {
+        float t;           // reference distance from the leg's start
+        float majorant;    // μ there
+        float probability; // detached probability of the event taken (null collision; RR survival for ratio
+                           // tracking)
+    };
+    float length = 0.f; // reference length ℓ0 of the leg
+    float pdf = 1.f;    // homogeneous: the density of the outcome (1/length or probability)
+    float real_majorant = 0.f, real_probability = 1.f; // heterogeneous free flight: the real collision
+    std::vector<Collision> collisions;
+
+    void reset(float leg_length) {
+        length = leg_length;
+        pdf = 1.f;
+        real_majorant = 0.f;
+        real_probability = 1.f;
+        collisions.clear();
+    }
+};
+
+namespace flight_detail {
+template <typename T> Color3<T> exp_neg(const Color3<T>& v) {
+    using std::exp;
+    return {exp(-v.x), exp(-v.y), exp(-v.z)};
+}
+} // namespace flight_detail
+
+// The free-flight weight of a leg a → b (b the scattering point when `scattered`, else the leg's end):
+// Tr(a, b) σs(b) / p (scattered) or Tr(a, b) / P (passed), re-evaluated on the moving leg.
+template <typename T>
+Color3<T> flight_weight(const Medium& medium, const FlightRecord& r, bool scattered, const Vec3<T>& a,
+                        const Vec3<T>& b) {
+    using std::sqrt;
+    const Vec3<T> ab = b - a;
+    const T length = sqrt(squared_norm(ab));
+    if (medium.is_homogeneous()) {
+        const Color3<T> sigma_t = medium.sigma_t(a);
+        const Color3<T> tr = flight_detail::exp_neg(sigma_t * length);
+        return (scattered ? tr * sigma_t * medium.albedo(b) : tr) / T(r.pdf);
+    }
+    const T stretch = length / T(r.length);
+    Color3<T> w(T(1));
+    for (const FlightRecord::Collision& c : r.collisions) {
+        const Vec3<T> y = a + ab * T(c.t / r.length);
+        w *= (Color3<T>(T(c.majorant)) - medium.sigma_t(y) * stretch) / T(c.majorant * c.probability);
+    }
+    if (scattered) w *= medium.sigma_t(b) * medium.albedo(b) / T(r.real_majorant * r.real_probability);
+    return w;
+}
+
+// The transmittance estimate of a leg a → b (ratio tracking, its Russian roulette detached), re-evaluated on
+// the moving leg; exact in homogeneous media.
+template <typename T>
+Color3<T> transmittance_weight(const Medium& medium, const FlightRecord& r, const Vec3<T>& a,
+                               const Vec3<T>& b) {
+    using std::sqrt;
+    const Vec3<T> ab = b - a;
+    const T length = sqrt(squared_norm(ab));
+    if (medium.is_homogeneous()) return flight_detail::exp_neg(medium.sigma_t(a) * length);
+    const T stretch = length / T(r.length);
+    Color3<T> tr(T(1));
+    for (const FlightRecord::Collision& c : r.collisions) {
+        const Vec3<T> y = a + ab * T(c.t / r.length);
+        tr *= (Color3<T>(T(1)) - medium.sigma_t(y) * (stretch / T(c.majorant))) / T(c.probability);
+    }
+    return tr;
+}
+
+} // namespace penumbra
