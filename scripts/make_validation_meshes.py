@@ -8,6 +8,8 @@ docs/differentiable-media.md), deterministically (no random numbers: every shape
   bunny_blob.obj    a bunny-like closed blob (a star-shaped body with a head and two ears), smooth normals
   bumpy_sphere.obj  a unit sphere with low bumps, smooth normals
   deform_blob.obj   a rounded box-like blob (a superellipsoid), smooth normals, for the non-rigid deformation
+  sphere.obj        a unit icosphere (1280 triangles), smooth normals: the glass balls of the spheres demo (a
+                    `sphere` shape is tessellated far finer, and a moving shape bounding a medium is tetrahedralized)
 
 Closed meshes are subdivided icosahedra displaced along the radial direction (star-shaped, hence never
 self-intersecting), so TetGen can tetrahedralize them. Run from the repository root:
@@ -186,9 +188,16 @@ def deform_blob():
     write_obj("deform_blob.obj", v, f, n, comment="rounded box, half sizes 0.6 x 0.42 x 0.6, centered at the origin")
 
 
+def sphere():
+    """Unit icosphere: 1280 triangles."""
+    v, f, n = radial_mesh(3, lambda d: np.ones(len(d)))
+    write_obj("sphere.obj", v, f, n, comment="unit icosphere centered at the origin")
+
+
 if __name__ == "__main__":
     branches()
     smoke()
     bunny_blob()
     bumpy_sphere()
     deform_blob()
+    sphere()
