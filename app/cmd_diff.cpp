@@ -40,7 +40,7 @@ void add_common(CLI::App* cmd, Common& c, bool needs_params) {
     auto* p = cmd->add_option(
         "--param", c.params,
         "parameter to differentiate, optionally with a direction: NAME[=v1,v2,...] (repeatable); "
-        "shape rotate/scale motions take a center: NAME@cx,cy,cz[=...]");
+        "shape rotate/scale/deform motions take a center: NAME@cx,cy,cz[=...]");
     if (needs_params) p->required();
     cmd->add_option("-D", c.defines, "override a <default> value: name=value");
     cmd->add_option("--spp", c.spp, "samples per pixel (in total)")->check(CLI::PositiveNumber);
@@ -134,6 +134,9 @@ void cmd_params(const Common& c) {
                            : p.sensor || p.emitter                ? "motion (direction: world axis; radians)"
                            : p.kind == Parameter::Kind::Rotate
                                ? "motion (direction: world axis; radians; NAME@cx,cy,cz: about that center)"
+                           : p.kind == Parameter::Kind::Deform
+                               ? "motion (x + θ d exp(-|x-c|²/2r²), r = bbox diagonal / 4; direction: world "
+                                 "vector d; NAME@cx,cy,cz: c)"
                                : "motion (uniform scale; NAME@cx,cy,cz: about that center)";
         std::printf("%-48s %10d  %s\n", p.name.c_str(), p.size, kind);
     }

@@ -1,6 +1,6 @@
 // The interior term with participating media (paper 001 §5.1; src/render/volpath_material.h) against central
 // finite differences of the volpath renderer: derivatives w.r.t. σt, albedo and the HG g of a homogeneous and
-// of a heterogeneous medium (through the free-flight and ratio-tracking re-evaluations of
+// of a heterogeneous medium (its scale and its grid's voxels, `<volume>.data`) (through the free-flight and ratio-tracking re-evaluations of
 // render/flight_record.h), and a surface parameter seen through a medium; forward and reverse mode adjoint;
 // the float instantiation of the estimator agrees with the renderer.
 #include "diff_check.h"
@@ -49,7 +49,7 @@ const std::string kHomogeneous = R"(<medium type="homogeneous" id="fog">
         <phase type="hg"><float name="g" value="0.3"/></phase></medium>)";
 
 const std::string kHeterogeneous = R"(<medium type="heterogeneous" id="fog">
-        <volume type="gridvolume" name="sigma_t"><string name="filename" value="density.vol"/></volume>
+        <volume type="gridvolume" name="sigma_t" id="density"><string name="filename" value="density.vol"/></volume>
         <float name="scale" value="0.8"/><rgb name="albedo" value="0.8, 0.7, 0.6"/>
         <phase type="hg"><float name="g" value="0.3"/></phase></medium>)";
 
@@ -100,6 +100,7 @@ INSTANTIATE_TEST_SUITE_P(Parameters, MediaInterior,
                                            MediumParam{"hom", "fog.albedo", 0.02, 32, 256},
                                            MediumParam{"hom", "fog.phase_function.g", 0.05, 32, 256},
                                            MediumParam{"het", "fog.scale", 0.05, 32, 1024},
+                                           MediumParam{"het", "density.data", 0.05, 32, 1024},
                                            MediumParam{"het", "fog.albedo", 0.04, 64, 1024},
                                            MediumParam{"het", "fog.phase_function.g", 0.08, 64, 1024},
                                            MediumParam{"het", "floor_bsdf.reflectance", 0.02, 64, 1024}),

@@ -27,23 +27,30 @@ struct MovedVertices {
         // linear part).
         if (base >= 0 && shape.group_shape)
             x += shape.instance_to_world.apply_vector(Vec3<Var>(leaf(0.f, 0), leaf(0.f, 1), leaf(0.f, 2)));
-        // dX/dθ at θ = 0: translate d, rotate a × (p - c), scale (p - c).
-        for (const Motion& m : motions) {
-            const Var theta = Var::parameter(0.f, m.index);
-            if (m.kind == Parameter::Kind::Translate) x += Vec3<Var>(m.vector) * theta;
-            else if (m.kind == Parameter::Kind::Rotate) x += Vec3<Var>(cross(m.vector, p0 - m.center)) * theta;
-            else x += Vec3<Var>(p0 - m.center) * theta;
-        }
+        for (const Motion& m : motions) x += Vec3<Var>(velocity(m, p0)) * Var::parameter(0.f, m.index);
         return x;
     }
-    // Vertex normals rotate with rotations; translations and uniform scaling leave them unchanged. Under
-    // vertex_positions they are recomputed from the positions (as Mitsuba 3's Mesh::parameters_changed does),
-    // so they move with the vertices around them.
+    // dX/dθ at θ = 0 of a motion at p: translate d, rotate a × (p - c), scale (p - c), deform d φ(p).
+    static Vec3f velocity(const Motion& m, const Vec3f& p) {
+        switch (m.kind) {
+        case Parameter::Kind::Translate: return m.vector;
+        case Parameter::Kind::Rotate: return cross(m.vector, p - m.center);
+        case Parameter::Kind::Deform: return m.vector * deform_weight(m, p);
+        default: return p - m.center;
+        }
+    }
+    // Vertex normals rotate with rotations; translations and uniform scaling leave them unchanged; a
+    // deformation turns them by the inverse transpose of its gradient, n - θ ∇φ (d·n) to first order (the
+    // surface normalizes them). Under vertex_positions they are recomputed from the positions (as Mitsuba 3's
+    // Mesh::parameters_changed does), so they move with the vertices around them.
     Vec3<Var> normal(uint32_t v) const {
         const Vec3f n0 = shape.mesh.normals[v];
         Vec3<Var> n = shape.vertex_index() >= 0 ? smooth_normal(v) : Vec3<Var>(n0);
         for (const Motion& m : motions)
             if (m.kind == Parameter::Kind::Rotate) n += Vec3<Var>(cross(m.vector, n0)) * Var::parameter(0.f, m.index);
+            else if (m.kind == Parameter::Kind::Deform)
+                n -= Vec3<Var>(deform_weight_gradient(m, shape.mesh.positions[v]) * dot(m.vector, n0)) *
+                     Var::parameter(0.f, m.index);
         return n;
     }
 

@@ -84,7 +84,9 @@ ParameterTable::ParameterTable(Scene& scene) : scene_(scene), params_(std::make_
     for (const Parameter& p : params_->all()) {
         Entry e{p.name, p.dims.empty() ? std::vector<int>{p.size} : p.dims, p.kind != Kind::Data, p.geometry};
         Item item{&p, -1};
-        if (e.motion) {
+        // A deformation is listed (entries follow Parameters::all()) but is no part of a pose.
+        if (p.kind == Kind::Deform) e.shape = {1};
+        if (e.motion && p.kind != Kind::Deform) {
             e.shape = {p.kind == Kind::Scale ? 1 : 3};
             const std::string owner = p.name.substr(0, p.name.rfind('.'));
             auto [it, added] = pose_index.try_emplace(owner, int(poses_.size()));
@@ -137,6 +139,7 @@ std::vector<float> ParameterTable::get(int entry) const {
     if (auto it = staged_.find(entry); it != staged_.end()) return it->second;
     const Parameter& p = *items_[size_t(entry)].param;
     if (p.kind == Kind::Data) return {p.data, p.data + p.size};
+    if (p.kind == Kind::Deform) return {0.f};
     const Pose& pose = pose_of(entry);
     if (p.kind == Kind::Scale) return {float(pose.values.s)};
     return floats(p.kind == Kind::Translate ? pose.values.t : pose.values.r);
@@ -150,6 +153,12 @@ void ParameterTable::set(int entry, const float* values, size_t count) {
     for (size_t k = 0; k < count; ++k)
         if (!std::isfinite(values[k]))
             throw Error("parameter '" + e.name + "': value " + std::to_string(k) + " is not finite");
+    // A deformation stays at its reference (0): writing the listed values back is harmless.
+    if (items_[size_t(entry)].param->kind == Kind::Deform) {
+        if (values[0] == 0.f) return;
+        throw Error("parameter '" + e.name +
+                    "': deformations cannot be set in the parameter table, only differentiated (--param)");
+    }
     if (items_[size_t(entry)].param->kind == Kind::Scale && !(values[0] > -1.f))
         throw Error("parameter '" + e.name +
                     "': the scale factor 1 + s must be positive, got s = " + std::to_string(values[0]));
@@ -281,7 +290,9 @@ void ParameterTable::enable(const std::vector<std::pair<int, std::vector<float>>
         throw Error("parameter table: staged values are not applied yet (call apply() first)");
     std::vector<int> entries;
     for (const auto& [entry, direction] : directions) {
-        this->entry(entry);
+        if (this->entry(entry).motion && items_[size_t(entry)].param->kind == Kind::Deform)
+            throw Error("parameter '" + entries_[size_t(entry)].name +
+                        "': deformations cannot be selected in the parameter table (use --param)");
         entries.push_back(entry);
     }
     check(pose_values(), deformed_, entries);

@@ -34,6 +34,7 @@ public:
         p.dims = shape;
         p.index = index;
         p.geometry = geometry;
+        p.owner = owner_;
         p.shape = dynamic_cast<Shape*>(owner_);
         out_.push_back(std::move(p));
     }
@@ -109,6 +110,19 @@ Vec3f rotate(const Vec3f& v, const Vec3f& a, float t) {
     return v * c + cross(a, v) * s + a * (dot(a, v) * (1.f - c));
 }
 
+// x -> x + θ d φ(x) (exact: X is linear in θ); normals by the inverse transpose of the deformation gradient
+// F = I + θ d ∇φᵀ (Sherman–Morrison: F⁻ᵀ n = n - θ ∇φ (d·n) / (1 + θ ∇φ·d)).
+void deform(TriangleMesh& mesh, const Motion& m, float theta) {
+    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+        const Vec3f x = mesh.positions[v];
+        mesh.positions[v] = x + m.vector * (theta * deform_weight(m, x));
+        if (v >= mesh.normals.size()) continue;
+        const Vec3f g = deform_weight_gradient(m, x);
+        const Vec3f n = mesh.normals[v];
+        mesh.normals[v] = normalize(n - g * (theta * dot(m.vector, n) / (1.f + theta * dot(g, m.vector))));
+    }
+}
+
 } // namespace
 
 Vec3f bbox_center(const std::vector<Shape*>& shapes) {
@@ -119,6 +133,16 @@ Vec3f bbox_center(const std::vector<Shape*>& shapes) {
             hi = max(hi, p);
         }
     return (lo + hi) * 0.5f;
+}
+
+float bbox_diagonal(const std::vector<Shape*>& shapes) {
+    Vec3f lo(Infinity), hi(-Infinity);
+    for (const Shape* shape : shapes)
+        for (const Vec3f& p : shape->mesh.positions) {
+            lo = min(lo, p);
+            hi = max(hi, p);
+        }
+    return norm(hi - lo);
 }
 
 Parameters::Parameters(Scene& scene) {
@@ -146,7 +170,8 @@ void Parameters::add_motions(Scene& scene) {
             Parameter p = moves;
             p.name = owner + (kind == Kind::Translate ? ".translate"
                               : kind == Kind::Rotate  ? ".rotate"
-                                                      : ".scale");
+                              : kind == Kind::Scale   ? ".scale"
+                                                      : ".deform");
             p.kind = kind;
             all_.push_back(p);
         }
@@ -155,7 +180,7 @@ void Parameters::add_motions(Scene& scene) {
         Parameter moves;
         moves.geometry = true;
         moves.shape = scene.shapes[i].get();
-        add(shape_name(*moves.shape, i), {Kind::Translate, Kind::Rotate, Kind::Scale}, moves);
+        add(shape_name(*moves.shape, i), {Kind::Translate, Kind::Rotate, Kind::Scale, Kind::Deform}, moves);
     }
     // An instance of a group with several shapes: its motions move all its copies.
     for (const auto& [id, copies] : scene.instance_shapes) {
@@ -164,7 +189,7 @@ void Parameters::add_motions(Scene& scene) {
         moves.geometry = true;
         moves.shape = copies[0];
         moves.shapes = copies;
-        add(id, {Kind::Translate, Kind::Rotate, Kind::Scale}, moves);
+        add(id, {Kind::Translate, Kind::Rotate, Kind::Scale, Kind::Deform}, moves);
     }
     Parameter camera;
     camera.sensor = true;
@@ -217,9 +242,10 @@ void Parameters::enable(const std::vector<std::pair<std::string, std::vector<flo
         const auto [name, center] = split_motion_center(selected);
         const Parameter& p = find(name);
         if (center && (p.sensor || p.emitter ||
-                       (p.kind != Parameter::Kind::Rotate && p.kind != Parameter::Kind::Scale)))
+                       (p.kind != Parameter::Kind::Rotate && p.kind != Parameter::Kind::Scale &&
+                        p.kind != Parameter::Kind::Deform)))
             throw Error("parameter '" + selected +
-                        "': a center (@x,y,z) applies to the rotate and scale motions of shapes");
+                        "': a center (@x,y,z) applies to the rotate, scale and deform motions of shapes");
         // A motion may be selected several times (e.g. the three axes of a translation), each with its own θ.
         if (p.kind == Parameter::Kind::Data && !names.insert(p.name).second)
             throw Error("parameter '" + name + "' is selected twice");
@@ -260,6 +286,10 @@ void Parameters::enable(const std::vector<std::pair<std::string, std::vector<flo
         } else {
             const std::vector<Shape*> shapes = motion_shapes(p);
             m.center = center ? *center : bbox_center(shapes);
+            if (p.kind == Parameter::Kind::Deform) {
+                m.radius = 0.25f * bbox_diagonal(shapes);
+                if (!(m.radius > 0.f)) throw Error("motion '" + name + "': the shape has an empty bounding box");
+            }
             for (Shape* shape : shapes)
                 shape_motions_[shape].push_back(m);
         }
@@ -289,7 +319,10 @@ void Parameters::displace(Scene& scene, double t) {
     // 1. Remember the reference configuration of everything that will move, and restore it.
     std::set<Shape*> moved;
     for (const auto& [p, index] : enabled_) {
-        if (p->kind == Parameter::Kind::Data) saved_data_.try_emplace(p->data, p->data, p->data + p->size);
+        if (p->kind == Parameter::Kind::Data) {
+            saved_data_.try_emplace(p->data, p->data, p->data + p->size);
+            data_owners_.try_emplace(p->data, p->owner);
+        }
         for (Shape* shape : moved_shapes(*p, scene))
             moved.insert(shape);
     }
@@ -305,11 +338,17 @@ void Parameters::displace(Scene& scene, double t) {
             for (int k = 0; k < p->size; ++k) p->data[k] += float(t * direction_[index + k]);
             recompute_moved_normals(*p);
         }
+    for (const auto& [data, owner] : data_owners_)
+        if (owner) owner->parameters_changed();
     update_moved(moved);
     // 3. Motions, exactly (finite θ = t), on top.
     const float theta = float(t);
     for (Shape* shape : moved) {
         for (const Motion& m : motions(shape)) {
+            if (m.kind == Parameter::Kind::Deform) {
+                deform(shape->mesh, m, theta);
+                continue;
+            }
             for (Vec3f& x : shape->mesh.positions) {
                 if (m.kind == Parameter::Kind::Translate) x += m.vector * theta;
                 else if (m.kind == Parameter::Kind::Rotate) x = m.center + rotate(x - m.center, m.vector, theta);
@@ -355,6 +394,7 @@ void Parameters::set_direction(const std::vector<float>& direction) {
 
 void Parameters::rebase(const Scene& scene) {
     saved_data_.clear();
+    data_owners_.clear();
     saved_meshes_.clear();
     saved_emitters_.clear();
     saved_sensor_ = scene.sensor->to_world;
@@ -377,6 +417,7 @@ void Parameters::set_values(Scene& scene, const std::vector<float>& values, bool
             if (!std::isfinite(values[index + k])) throw Error("set_values: non-finite value for '" + p->name + "'");
         std::copy(values.begin() + index, values.begin() + index + p->size, p->data);
         recompute_moved_normals(*p);
+        if (p->owner) p->owner->parameters_changed();
         for (Shape* shape : moved_shapes(*p, scene))
             moved.insert(shape);
     }
@@ -384,6 +425,7 @@ void Parameters::set_values(Scene& scene, const std::vector<float>& values, bool
     for (Shape* shape : moved) shape->finalize();
     if (!moved.empty() && rebuild) scene.build();
     saved_data_.clear(); // the new values are the reference configuration from now on
+    data_owners_.clear();
     saved_meshes_.clear();
 }
 

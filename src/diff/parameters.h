@@ -9,13 +9,18 @@
 //   <shape>.translate  x -> x + θ d             (d: a world-space vector)
 //   <shape>.rotate     x -> c + R(a, θ)(x - c)  (a: world axis, θ in radians, c: the bounding-box center)
 //   <shape>.scale      x -> c + (1 + θ)(x - c)  (uniform, about the bounding-box center)
-//   <shape>.rotate@cx,cy,cz, <shape>.scale@cx,cy,cz: the same about the world point c (plane.scale@0,0,0
-//                      scales about the origin, as Mitsuba's tests do)
+//   <shape>.deform     x -> x + θ d φ(x), φ(x) = exp(-|x - c|² / (2 r²))   (a cage-free non-rigid deformation:
+//                      d a world vector, c the bounding-box center, r a quarter of the bounding box's diagonal,
+//                      so that φ falls to e^-2 at the box's corners and the shape bends rather than translates;
+//                      several selections, each with its own d and center, are a pose of few control variables)
+//   <shape>.rotate@cx,cy,cz, <shape>.scale@cx,cy,cz, <shape>.deform@cx,cy,cz: the same about the world point c
+//                      (plane.scale@0,0,0 scales about the origin, as Mitsuba's tests do)
 //   <sensor>.translate / <sensor>.rotate        the camera moves (world axes; rotation about its position)
 //   <emitter>.translate / <emitter>.rotate      a point, spot or projector light moves (rotation about its
 //                      position); <emitter>.rotate turns a directional light's direction or an envmap
 // Instances (<shape type="instance">) are flattened into world-space shapes first (Scene::flatten_instances):
-//   <instance id>.translate/rotate/scale   all shapes of the instance together (center: their bounding box)
+//   <instance id>.translate/rotate/scale/deform   all shapes of the instance together (center and radius:
+//                      their bounding box)
 //   <group shape>.vertex_positions         group-space positions (copies move by their to_world's linear map)
 #pragma once
 #include "scene/emitter.h"
@@ -29,13 +34,14 @@
 namespace penumbra {
 
 struct Parameter {
-    enum class Kind { Data, Translate, Rotate, Scale };
+    enum class Kind { Data, Translate, Rotate, Scale, Deform };
     std::string name;
     Kind kind = Kind::Data;
     float* data = nullptr;  // Data: the values inside the scene object
     int size = 1;           // number of scalars
     std::vector<int> dims;  // Data: the array's shape ({H, W, 3} images, {N, 3} vertex positions, {3}, {1})
     int* index = nullptr;   // Data: where the object reads its parameter index (core/param.h)
+    Object* owner = nullptr; // Data: the object that listed it (told by parameters_changed() when written)
     bool geometry = false;  // changing it moves geometry (the BVH must be rebuilt)
     Shape* shape = nullptr; // motions of shapes, and vertex_positions
     std::vector<Shape*> shapes; // motions of an instance of a group with several shapes: its flattened copies
@@ -46,10 +52,19 @@ struct Parameter {
 // A motion in use: which parameter index drives it and how (first-order form at θ = 0).
 struct Motion {
     Parameter::Kind kind;
-    Vec3f vector; // translation direction or rotation axis
-    Vec3f center; // rotation / scaling center
+    Vec3f vector; // translation or deformation direction, or rotation axis
+    Vec3f center; // rotation / scaling / deformation center
     int index;    // parameter index of θ
+    float radius = 0.f; // Deform: the radius r of φ
 };
+
+// φ(x) = exp(-|x - c|² / (2 r²)) of a Deform motion (x -> x + θ d φ(x)), and its gradient -φ (x - c) / r².
+inline float deform_weight(const Motion& m, const Vec3f& x) {
+    return std::exp(-squared_norm(x - m.center) / (2.f * m.radius * m.radius));
+}
+inline Vec3f deform_weight_gradient(const Motion& m, const Vec3f& x) {
+    return (x - m.center) * (-deform_weight(m, x) / (m.radius * m.radius));
+}
 
 class Parameters {
 public:
@@ -64,7 +79,8 @@ public:
 
     // Enables parameters for differentiation, each with a direction: `direction` has the parameter's size, or
     // 3 values broadcast over an array of 3-vectors (colors, vertex positions), or 1 value broadcast; for
-    // translate it is the world vector, for rotate the world axis (empty: unit directions / +y axis).
+    // translate and deform it is the world vector, for rotate the world axis (empty: unit directions / +x for
+    // translate and deform / +y axis).
     // Indices are assigned contiguously in the given order. A motion may be selected several times, each
     // selection with its own direction and scalar θ (a pose: translate along x, y, z and rotate about x, y, z);
     // a Data parameter only once. Disables everything enabled before.
@@ -113,14 +129,17 @@ public:
     std::map<const Emitter*, std::vector<Motion>> emitter_motions_;
     // Reference values of everything displace() may change.
     std::map<float*, std::vector<float>> saved_data_;
+    std::map<float*, Object*> data_owners_; // owners of the values in saved_data_
     std::map<Shape*, std::pair<std::vector<Vec3f>, std::vector<Vec3f>>> saved_meshes_;
     Transform saved_sensor_;
     std::map<Emitter*, Transform> saved_emitters_;
 };
 
-// The center of the bounding box of the shapes' meshes (the default center of their rotate and scale
+// The center of the bounding box of the shapes' meshes (the default center of their rotate, scale and deform
 // motions).
 Vec3f bbox_center(const std::vector<Shape*>& shapes);
+// The length of the diagonal of that bounding box.
+float bbox_diagonal(const std::vector<Shape*>& shapes);
 
 // Parses "name" or "name=v1,v2,..." (the CLI's --param syntax).
 std::pair<std::string, std::vector<float>> parse_param_selection(const std::string& text);

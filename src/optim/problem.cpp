@@ -48,6 +48,8 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
             if (p.sensor || p.emitter)
                 throw Error("parameter '" + op.name +
                             "': camera motions and light motions cannot be optimized, only shape poses");
+            if (p.kind == Parameter::Kind::Deform)
+                throw Error("parameter '" + op.name + "': deformations cannot be optimized, only shape poses");
             if (p.kind == Parameter::Kind::Scale)
                 throw Error("parameter '" + op.name +
                             "': scaling cannot be optimized; a pose is <shape>.translate and <shape>.rotate");

@@ -39,6 +39,9 @@ public:
     virtual ~Object() = default;
     // Lists the differentiable parameters; objects without any keep the default.
     virtual void traverse(ParamVisitor&) {}
+    // Called after values listed by traverse() were written from outside (Mitsuba's parameters_changed):
+    // objects with derived data (a grid's majorants) refresh it; throws Error for values they cannot take.
+    virtual void parameters_changed() {}
     virtual ObjectKind kind() const = 0;
     virtual std::string to_string() const { return std::string(kind_name(kind())) + "[" + plugin + "]"; }
     std::string id;       // the XML `id` attribute (may be empty)

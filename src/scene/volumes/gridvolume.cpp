@@ -31,7 +31,7 @@ namespace penumbra {
 GridVolume::GridVolume(VolumeGridData grid, const Transform& unit_to_world, Filter filter, Wrap wrap,
                        float max_value)
     : res_(grid.res), channels_(grid.channels), values_(std::move(grid.values)),
-      to_local_(unit_to_world.inverse()), filter_(filter), wrap_(wrap) {
+      to_local_(unit_to_world.inverse()), filter_(filter), wrap_(wrap), max_value_(max_value) {
     for (int corner = 0; corner < 8; ++corner) {
         const Vec3f p =
             unit_to_world.apply_point(Vec3f(float(corner & 1), float((corner >> 1) & 1), float(corner >> 2)));
@@ -43,6 +43,17 @@ GridVolume::GridVolume(VolumeGridData grid, const Transform& unit_to_world, Filt
     max_ = *hi;
     build_block_maxima();
     if (max_value >= 0.f) max_ = max_value;
+}
+
+void GridVolume::parameters_changed() {
+    for (const float v : values_)
+        if (!std::isfinite(v) || v < 0.f)
+            throw Error("gridvolume" + (id.empty() ? std::string() : " '" + id + "'") +
+                        ": data must be finite and non-negative (got " + std::to_string(v) + ")");
+    const auto [lo, hi] = std::minmax_element(values_.begin(), values_.end());
+    min_ = *lo;
+    max_ = std::max(*hi, max_value_);
+    build_block_maxima();
 }
 
 // Block (bx, by, bz) covers voxel coordinates [b B, (b + 1) B) per axis. Lookups there read voxels

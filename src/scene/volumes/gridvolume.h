@@ -23,7 +23,8 @@ class GridVolume final : public VolumeBase<GridVolume> {
     // Texture lookup at world point p: p -> unit cube (inverse of unit_to_world) -> voxel coordinates, voxel
     // (i, j, k) centred at ((i, j, k) + 1/2) / res (Mitsuba's convention). Trilinear: the 8 voxels around
     // u res - 1/2 weighted by their distance; nearest: the voxel containing u res. Indices outside the grid
-    // follow the wrap mode. Derivatives flow through the interpolation weights (the voxel data is constant).
+    // follow the wrap mode. Derivatives flow through the interpolation weights and, when `data` is
+    // differentiated, through the voxel values.
     template <typename T> Color3<T> eval_t(const Vec3<T>& p) const {
         const Vec3<T> u = to_local_.apply_point(p);
         if (filter_ == Filter::Nearest) {
@@ -60,6 +61,12 @@ class GridVolume final : public VolumeBase<GridVolume> {
     int channel_count() const override { return channels_; }
     Vec3i resolution() const { return res_; }
     std::string to_string() const override;
+    // `data` (Mitsuba's key): the voxel values, shape {z, y, x, channels}.
+    void traverse(ParamVisitor& v) override {
+        v.put_array("data", values_.data(), {res_.z, res_.y, res_.x, channels_}, &data_index_);
+    }
+    // New voxel values: the bounds (majorants) follow them; negative or non-finite values are an Error.
+    void parameters_changed() override;
 
   private:
     // floor(x) as an int, finite and far enough from overflow for the wrap modes.
@@ -81,9 +88,10 @@ class GridVolume final : public VolumeBase<GridVolume> {
         return 0;
     }
     template <typename T> Color3<T> voxel(int x, int y, int z) const {
-        const float* v = &values_[((size_t(z) * size_t(res_.y) + size_t(y)) * size_t(res_.x) + size_t(x)) *
-                                  size_t(channels_)];
-        return channels_ == 1 ? Color3<T>(T(v[0])) : Color3<T>(T(v[0]), T(v[1]), T(v[2]));
+        const size_t i =
+            ((size_t(z) * size_t(res_.y) + size_t(y)) * size_t(res_.x) + size_t(x)) * size_t(channels_);
+        const auto at = [&](size_t k) { return param_value<T>(values_[k], data_index_ < 0 ? -1 : data_index_ + int(k)); };
+        return channels_ == 1 ? Color3<T>(at(i)) : Color3<T>(at(i), at(i + 1), at(i + 2));
     }
     void build_block_maxima();
     float block_max(int bx, int by, int bz) const {
@@ -98,6 +106,8 @@ class GridVolume final : public VolumeBase<GridVolume> {
     Wrap wrap_;
     BoundingBox3f bbox_; // world-space bounds of the unit cube
     float max_ = 0.f, min_ = 0.f;
+    float max_value_ = -1.f; // Mitsuba's `max_value` override (negative: none)
+    int data_index_ = -1;    // first parameter index of `data` when differentiated
     Vec3i blocks_;
     std::vector<float> block_max_;
 };
