@@ -1,9 +1,13 @@
 // Inverse rendering with participating media (paper 001 §7.2; docs/differentiable-media.md): the demos of
 // scenes/media_demos converge from their perturbed starts at a tiny resolution, with psdr gradients.
+#include "diff/parameters.h"
+#include "optim/deformation.h"
 #include "optim/optimize.h"
+#include "scene/scene.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
@@ -50,4 +54,44 @@ TEST(MediaDemo, RecoversRoughnessAndDensityOfATranslucentObject) {
     std::printf("  parameter error %.4g -> %.4g, loss %.4g -> %.4g, %.1f s\n", first.parameter_error,
                 r.final_parameter_error, first.loss, r.history.back().loss, r.seconds);
     EXPECT_LT(r.final_parameter_error, first.parameter_error / 5);
+}
+
+// A deformation handle of the optimizer (optim/deformation.h) moves the mesh exactly as the deform motion
+// that its gradient is taken with (diff/parameters.h: x + θ d φ(x), linear in θ), normals included.
+TEST(MediaDemo, DeformationHandleMovesTheMeshLikeTheMotion) {
+    auto moved =
+        load_scene(std::string(PENUMBRA_SOURCE_DIR) + "/scenes/validation/deform.xml", {{"res", "8"}});
+    auto reference =
+        load_scene(std::string(PENUMBRA_SOURCE_DIR) + "/scenes/validation/deform.xml", {{"res", "8"}});
+    Shape* blob = nullptr;
+    for (auto& s : moved->shapes)
+        blob = s->id == "blob" ? s.get() : blob;
+    ASSERT_NE(blob, nullptr);
+    ShapeDeformation deformation(*blob);
+    const int handle = deformation.add_handle(Vec3f(0.35f, 0.95f, 0.3f));
+    const Vec3d theta(0.08, -0.03, 0.05);
+    deformation.set(handle, theta);
+    deformation.apply();
+
+    Parameters params(*reference);
+    params.enable({parse_param_selection("blob.deform@0.35,0.95,0.3=0.08,-0.03,0.05")});
+    params.displace(*reference, 1.0);
+    const Shape* expected = nullptr;
+    for (auto& s : reference->shapes)
+        expected = s->id == "blob" ? s.get() : expected;
+    ASSERT_NE(expected, nullptr);
+    double worst_position = 0, worst_normal = 0, largest_motion = 0;
+    for (size_t v = 0; v < blob->mesh.positions.size(); ++v) {
+        worst_position =
+            std::max(worst_position, double(norm(blob->mesh.positions[v] - expected->mesh.positions[v])));
+        worst_normal =
+            std::max(worst_normal, double(norm(blob->mesh.normals[v] - expected->mesh.normals[v])));
+    }
+    params.displace(*reference, 0.0);
+    for (size_t v = 0; v < blob->mesh.positions.size(); ++v)
+        largest_motion =
+            std::max(largest_motion, double(norm(blob->mesh.positions[v] - expected->mesh.positions[v])));
+    EXPECT_GT(largest_motion, 0.02);
+    EXPECT_LT(worst_position, 1e-5);
+    EXPECT_LT(worst_normal, 1e-4);
 }
