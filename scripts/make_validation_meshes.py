@@ -115,7 +115,9 @@ def box(center, half, axis_u):
 
 
 def branches():
-    """A trunk (along +y) with three tiers of branches, each carrying two twigs: thin boxes, about 500 triangles."""
+    """A trunk (along +y) with three tiers of branches, each carrying two twigs: thin boxes, about 500 triangles.
+    The boxes do not touch (small gaps where a branch leaves the trunk or a twig its branch): the surface does
+    not intersect itself, so that the medium around it can be tetrahedralized (TetGen)."""
     parts = [box((0.0, 0.5, 0.0), (0.5, 0.035, 0.035), (0, 1, 0))]
     for tier in range(3):
         y = 0.35 + 0.28 * tier
@@ -124,13 +126,13 @@ def branches():
             direction = np.array([np.cos(phi), 0.35 - 0.1 * tier, np.sin(phi)])
             direction /= np.linalg.norm(direction)
             length = 0.55 - 0.12 * tier
-            start = np.array([0.0, y, 0.0])
+            start = np.array([0.0, y, 0.0]) + 0.09 * direction  # clear of the trunk (half diagonal 0.05)
             parts.append(box(start + 0.5 * length * direction, (0.5 * length, 0.018, 0.018), direction))
-            for t, side in ((0.55, 1.0), (0.85, -1.0)):
-                base = start + t * length * direction
+            for t, side in ((0.45, 1.0), (0.75, -1.0)):
                 turn = phi + side * 0.8
                 twig = np.array([np.cos(turn), 0.25, np.sin(turn)])
                 twig /= np.linalg.norm(twig)
+                base = start + t * length * direction + 0.08 * twig  # clear of the branch
                 tl = 0.22 * length / 0.55
                 parts.append(box(base + 0.5 * tl * twig, (0.5 * tl, 0.009, 0.009), twig))
     v, f = [], []
