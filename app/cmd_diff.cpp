@@ -209,6 +209,8 @@ void cmd_gradient(const Common& c) {
         g = method->gradient(*scene, params, read_image(c.adjoint, false), run);
     }
     out["method"] = c.method + ": " + g.description;
+    for (const std::string& w : g.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    out["warnings"] = g.warnings;
     out["seconds"] = g.seconds;
     out["spp"] = c.spp;
     for (const auto& [p, index] : params.enabled()) {

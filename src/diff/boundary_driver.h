@@ -30,6 +30,7 @@ struct BoundaryOptions {
     PathSettings path;
     FirstVertex first_vertex = FirstVertex::Auto; // must match the interior term's (diff/first_vertex.h)
     bool guiding = true;                          // terms that can guide their sampling by a pilot do
+    bool volume_endpoints = true;                 // boundary segments may end at medium vertices (shadow sheets)
     SampleCost* cost = nullptr;                   // if set, the samples' cost is added to it
 };
 

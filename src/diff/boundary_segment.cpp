@@ -1,6 +1,8 @@
 #include "diff/boundary_segment.h"
 
 #include "core/warp.h"
+#include "diff/media_walk.h"
+#include "render/light_medium.h"
 #include "scene/shape_interaction.h"
 
 #include <algorithm>
@@ -159,10 +161,12 @@ std::vector<uint32_t> shadow_edges(const SceneEdges& edges, const Emitter& emitt
 
 } // namespace
 
-SceneEdges::SceneEdges(const Scene& scene) {
+SceneEdges::SceneEdges(const Scene& scene) : media(scene_has_media(scene)) {
     std::map<const Shape*, bool> self_shadowing;
     std::vector<uint32_t> indices;
     for (const auto& shape : scene.shapes) {
+        // An index-matched boundary (a pure null BSDF) does not occlude: its edges are not discontinuities.
+        if (shape->bsdf && shape->bsdf->flags() == BSDFNull) continue;
         const std::vector<Edge> mesh_edges = discontinuity_edges(shape->mesh);
         const bool closed = std::none_of(mesh_edges.begin(), mesh_edges.end(), [](const Edge& e) { return e.f1 < 0; });
         const size_t first = edges.size();
@@ -189,9 +193,25 @@ EdgePoint sample_edge_point(const SceneEdges& edges, const EdgeSet& set, float u
     return out;
 }
 
-BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& form, const SegmentSource& source,
-                                       const EdgePoint& x_b, RayCounter& rays) {
+namespace {
+
+// Eqs. 47–50 for a medium vertex x_D0 on the shadow sheet: the sheet is the plane through the source src(θ) and
+// the edge a(θ) b(θ) (for a source at infinity src = x_B − ω); its point along n from x_D0 is
+// x_sheet = x_D0 + n λ(θ), and the normal velocity relative to the medium's material point X(p_D, θ) is that of
+// (x_sheet − X(p_D, θ)) · n = λ(θ) − (X(p_D, θ) − x_D0) · n.
+Var sheet_velocity(const Vec3<Var>& src, const Vec3<Var>& a, const Vec3<Var>& b, const Vec3f& x_d, const Vec3f& n,
+                   const Vec3<Var>& x_material) {
+    const Vec3<Var> m = cross(a - src, b - src), nv(n), xd(x_d);
+    const Var lambda = dot(m, src - xd) / dot(m, nv);
+    return lambda - dot(x_material - xd, nv);
+}
+
+} // namespace
+
+BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext& context, const SegmentSource& source,
+                                       const EdgePoint& x_b, Sampler& sampler, RayCounter& rays) {
     BoundarySegment out;
+    const MaterialForm& form = context.form;
     const Vec3f dir = source.infinite ? source.d : normalize(x_b.p - source.p);
     if (!grazes(*x_b.edge, dir)) return out;
     // Where the line through a point starts: the source, or (from infinity) beyond the scene's bounds.
@@ -199,24 +219,73 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& f
     auto origin = [&](const Vec3f& through) {
         return source.infinite ? through - dir * (2.f * (bounds.radius + norm(through - bounds.center)) + 1.f) : source.p;
     };
-    // A shadow ray from the source to `target`, stopping just short of it (from infinity: from beyond the bounds).
-    Interaction3f at_source;
-    at_source.p = source.p;
-    at_source.n = source.n;
-    auto blocked = [&](const Vec3f& target) {
-        Ray ray = source.infinite ? Ray(origin(target), dir, norm(target - origin(target))) : at_source.spawn_ray_to(target);
-        ray.tmax *= 0.999f;
-        ++rays.rays;
-        return scene.occluded(ray);
+
+    // The segment source → x_B must be clear (through media and null boundaries: its transmittance, stopping
+    // just short of x_B), and a free flight beyond x_B finds x_D0.
+    const Medium* medium = source.edge_medium;
+    Color3f tr(1.f);
+    if (!source.from_edge) {
+        Interaction3f at_source;
+        at_source.p = source.p;
+        at_source.n = source.n;
+        Ray to_edge =
+            source.infinite ? Ray(origin(x_b.p), dir, norm(x_b.p - origin(x_b.p))) : at_source.spawn_ray_to(x_b.p);
+        to_edge.tmax *= 0.999f;
+        medium = source.medium;
+        tr = walk_transmittance(scene, to_edge, medium, sampler, rays);
+        if (is_black(tr)) return out;
+    }
+    const FlightEnd end =
+        sample_interaction(scene, Ray(x_b.p + dir * ray_offset_scale(x_b.p), dir), medium, context.volume_endpoints, sampler, rays);
+    if (end.kind == FlightEnd::Kind::None || end.kind == FlightEnd::Kind::Escaped) return out;
+    if (end.kind == FlightEnd::Kind::Surface && !end.si.bsdf()) return out;
+    out.transmittance = tr * end.weight;
+    out.medium = end.medium;
+    out.direction = dir;
+    const Vec3f x_d = end.p;
+
+    // The side the edge's faces lie on, of the plane Π through the edge and the source (the line source → x
+    // grazes the edge for x on Π; points whose lines pass on the faces' side are behind them).
+    const TriangleMesh& edge_mesh = x_b.edge->shape->mesh;
+    const Vec3f plane_normal = cross(x_b.b - x_b.a, dir);
+    const float faces_side = dot(opposite_vertex(edge_mesh, x_b.edge->edge.f0, x_b.a, x_b.b) - x_b.a, plane_normal);
+    if (faces_side == 0.f) return out;
+
+    // The moving edge point and source (a delta light's motion moves the apex, or turns the direction, the
+    // shadow is cast from).
+    const Shape& edge_shape = *x_b.edge->shape;
+    const Vec3<Var> a_t = form.position(edge_shape, x_b.edge->edge.v0), b_t = form.position(edge_shape, x_b.edge->edge.v1);
+    const Vec3<Var> xb_t = a_t + (b_t - a_t) * Var(x_b.tau);
+    const Emitter* light = source.emitter && source.emitter->is_delta() ? source.emitter : nullptr;
+    auto source_t = [&] {
+        return source.infinite ? xb_t - (light ? form.light_direction(*light, dir) : Vec3<Var>(dir))
+               : source.shape  ? form.vertex(surface_interaction<float>(*source.shape, source.prim, source.bary,
+                                                                       MeshVertices{source.shape->mesh}))
+                                    .p
+               : light            ? form.light_position(*light, source.p)
+               : source.in_medium ? form.volume_motion().position(source.p, source.medium, nullptr)
+                                  : Vec3<Var>(source.p);
     };
 
-    // The segment source → x_B must be clear, and its extension beyond x_B finds the receiver x_D0.
-    if (blocked(x_b.p)) return out;
-    ++rays.rays;
-    SurfaceInteraction3f recv = scene.intersect(Ray(x_b.p + dir * ray_offset_scale(x_b.p), dir));
-    if (!recv.is_valid() || !recv.bsdf()) return out;
-    const Vec3f x_d = recv.p;
+    if (end.kind == FlightEnd::Kind::Medium) {
+        // A medium vertex on the shadow sheet: its area element per dℓ(x_B) dr_D, and the normal of the sheet
+        // turned toward the occluded side.
+        const Vec3f e = normalize(x_b.b - x_b.a);
+        const float sin_b = norm(cross(dir, e));
+        out.stretch = source.infinite ? sin_b : sin_b * norm(x_d - source.p) / norm(x_b.p - source.p);
+        if (!std::isfinite(out.stretch) || !(out.stretch > 0.f)) return out;
+        const Vec3f n = normalize(plane_normal) * (faces_side > 0.f ? 1.f : -1.f);
+        out.in_medium = true;
+        out.receiver.p = x_d;
+        out.cos_receiver = 1.f;
+        out.dark_point = x_d + n * (1e-4f * (1.f + norm(x_d - x_b.p)));
+        out.velocity = sheet_velocity(source_t(), a_t, b_t, x_d, n, form.volume_motion().position(x_d, end.medium, nullptr));
+        out.velocity_seen = out.velocity;
+        out.valid = true;
+        return out;
+    }
 
+    SurfaceInteraction3f recv = end.si;
     // The curve on the receiver's plane: its tangent from nearby edge points, the stretch dℓ(x_D0)/dℓ(x_B),
     // and its normal turned toward the occluded side.
     const uint32_t* tri = &recv.shape->mesh.indices[3 * size_t(recv.prim_index)];
@@ -229,15 +298,10 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& f
     if (!std::isfinite(out.stretch) || !(out.stretch > 0.f)) return out;
     Vec3f n = normalize(cross(recv.n, x_d2 - x_d1));
     // The occluded side, from the geometry rather than from probe rays (which, a hair's breadth from a finely
-    // tessellated silhouette and offset off the source's surface, can pass on the wrong side of the edge): the
-    // line source → x grazes the edge for x on the plane Π through the edge and the source; the edge's faces
-    // lie on one side of Π (the line grazes), and points of the receiver whose lines pass on that side are
-    // behind them. The lit side is lit: source → x_B → x_D0 is clear.
-    const TriangleMesh& edge_mesh = x_b.edge->shape->mesh;
-    const Vec3f plane_normal = cross(x_b.b - x_b.a, dir);
-    const float faces_side = dot(opposite_vertex(edge_mesh, x_b.edge->edge.f0, x_b.a, x_b.b) - x_b.a, plane_normal);
+    // tessellated silhouette and offset off the source's surface, can pass on the wrong side of the edge). The
+    // lit side is lit: source → x_B → x_D0 is clear.
     const float n_side = dot(n, plane_normal);
-    if (!(std::abs(n_side) > 1e-6f * norm(plane_normal)) || faces_side == 0.f) return out;
+    if (!(std::abs(n_side) > 1e-6f * norm(plane_normal))) return out;
     if ((n_side > 0.f) != (faces_side > 0.f)) n = n * -1.f;
     out.dark_point = x_d + n * (1e-3f * norm(x_d2 - x_d1) / (2.f * delta) + 1e-5f);
 
@@ -247,18 +311,7 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& f
 
     // Eqs. 47–50: the discontinuity point x_D0(θ) is where the line x_S0(θ) → x_B(θ) meets the receiver's
     // moving plane; its velocity relative to the receiver's material point, along n.
-    const Shape& edge_shape = *x_b.edge->shape;
-    const Vec3<Var> a_t = form.position(edge_shape, x_b.edge->edge.v0), b_t = form.position(edge_shape, x_b.edge->edge.v1);
-    const Vec3<Var> xb_t = a_t + (b_t - a_t) * Var(x_b.tau);
-    // A delta light's motion moves the apex (or turns the direction) the shadow is cast from.
-    const Emitter* light = source.emitter && source.emitter->is_delta() ? source.emitter : nullptr;
-    const Vec3<Var> src_t =
-        source.infinite ? xb_t - (light ? form.light_direction(*light, dir) : Vec3<Var>(dir))
-        : source.shape  ? form.vertex(surface_interaction<float>(*source.shape, source.prim, source.bary,
-                                                                MeshVertices{source.shape->mesh}))
-                             .p
-        : light ? form.light_position(*light, source.p)
-                : Vec3<Var>(source.p);
+    const Vec3<Var> src_t = source_t();
     const Vec3<Var> q0 = form.position(*recv.shape, tri[0]), q1 = form.position(*recv.shape, tri[1]),
                     q2 = form.position(*recv.shape, tri[2]);
     const Vec3<Var> n_t = cross(q1 - q0, q2 - q0);

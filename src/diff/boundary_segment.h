@@ -7,6 +7,14 @@
 // The estimators sample an edge point x_B by length and a source point (an emitter sample, or the first
 // surface behind x_B along a sampled direction), extend x_S0 → x_B to the receiver, and convert the measure
 // of the curve with dℓ(x_D0) = stretch · dℓ(x_B) (the ratio in Eq. 40).
+//
+// In participating media (Algorithm 1, sampleInteraction) the extension beyond x_B is a free flight: it ends
+// at a medium vertex x_D0 or passes on to the receiver surface. A medium vertex lies on the shadow sheet swept
+// by the lines from the source through the edge, whose area element is (Eqs. 39, 41)
+//     dA(x_D0) = (r_D / r_B) |ω × ê| dr_D dℓ(x_B)
+// (r_D, r_B the distances of x_D0 and x_B from the source, ω the segment's direction, ê the edge's tangent;
+// |ω × ê| dr_D dℓ(x_B) from a source at infinity): `stretch` then holds dA(x_D0) / (dℓ(x_B) dr_D). Every
+// segment carries its transmittance (with the free flight's weight).
 #pragma once
 #include "core/distribution.h"
 #include "diff/edges.h"
@@ -41,6 +49,8 @@ struct SceneEdges {
     // tessellated occluder only a band of edges around the silhouette remains, instead of all of them.
     std::vector<EdgeSet> lit;
 
+    bool media = false; // the scene has participating media (render/light_medium.h)
+
     explicit SceneEdges(const Scene& scene);
     bool empty() const { return edges.empty(); }
 };
@@ -72,20 +82,30 @@ struct SegmentSource {
     Vec3f n;
     const Shape* shape = nullptr;
     uint32_t prim = 0;
-    Vec2f bary;
+    Vec2f bary = Vec2f(0.f);
     bool infinite = false;
     Vec3f d = Vec3f(0.f);
     const Emitter* emitter = nullptr; // a point or directional light, whose motions move the source
+    const Medium* medium = nullptr;   // the medium the segment leaves the source in
+    bool in_medium = false;           // a medium vertex (moving by the volume motion)
+    // x_S0 was found by a free flight back from x_B (Algorithm 1, line 4): the segment x_S0 → x_B is clear, its
+    // transmittance is in the caller's weight, and x_B lies in `edge_medium`.
+    bool from_edge = false;
+    const Medium* edge_medium = nullptr;
 };
 
 struct BoundarySegment {
     bool valid = false;
-    SurfaceInteraction3f receiver; // x_D0, with wi pointing toward the source
-    float stretch = 0.f;           // dℓ(x_D0) / dℓ(x_B)
-    float cos_receiver = 0.f;      // |n(x_D0) · ω| for the segment's direction ω
+    SurfaceInteraction3f receiver; // x_D0, with wi pointing toward the source (a medium vertex: only p is set)
+    bool in_medium = false;        // x_D0 is a medium vertex (on the shadow sheet)
+    const Medium* medium = nullptr; // the medium of x_D0 (in_medium), or the one the segment reaches it through
+    Vec3f direction;               // ω, from the source toward x_D0
+    Color3f transmittance{1.f};    // Tr(x_S0 → x_B) times the free flight's weight (Tr σ_s / p at a medium vertex)
+    float stretch = 0.f;           // dℓ(x_D0) / dℓ(x_B); a medium vertex: dA(x_D0) / (dℓ(x_B) dr_D)
+    float cos_receiver = 0.f;      // |n(x_D0) · ω| for the segment's direction ω (1 at a medium vertex)
     Vec3f dark_point;              // a point of the receiver just across the curve, on the occluded side
     Var velocity;                  // (x_D0(θ) − receiver material point(θ)) · n_dark: its derivative is the
-                                   // curve's normal velocity, n_dark pointing into the occluded side
+                                   // curve's (or sheet's) normal velocity, n_dark pointing into the occluded side
     Var velocity_seen;             // the same relative to the point the fixed camera ray through x_D0 meets on
                                    // the moving receiver: the receiver as an image-space first vertex
 
@@ -94,11 +114,21 @@ struct BoundarySegment {
     const Var& velocity_at_depth(int t) const { return t == 0 ? velocity_seen : velocity; }
 };
 
-// Extends source → x_B beyond the edge to the receiver x_D0. Invalid when the edge does not graze the line,
-// the segment source → x_B is blocked, nothing (or no BSDF) lies beyond, or the curve degenerates. The lit side
-// is lit (source → x_B → x_D0 is clear); the occluded side is the one the edge's faces lie on. Records the
-// velocities on the thread's tape.
-BoundarySegment trace_boundary_segment(const Scene& scene, const MaterialForm& form, const SegmentSource& source,
-                                       const EdgePoint& x_b, RayCounter& rays);
+// What boundary segments are traced with: the motions of surface and medium vertices (the material form and
+// its volume motion), and whether a segment may end in a medium (false: the surface-only boundary segments of a
+// DTRT-like baseline); `media`: whether the scene has any (otherwise no medium look-ups).
+struct SegmentContext {
+    const MaterialForm& form;
+    bool volume_endpoints;
+    bool media;
+};
+
+// Extends source → x_B beyond the edge to the receiver x_D0 (with volume endpoints, a free flight that may
+// end in a medium). Invalid when the edge does not graze the line, the segment source → x_B is blocked, nothing
+// (or no BSDF) lies beyond, the flight is absorbed, or the curve degenerates. The lit side is lit
+// (source → x_B → x_D0 is clear); the occluded side is the one the edge's faces lie on. Records the velocities
+// on the thread's tape; a medium vertex moves by the volume motion.
+BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext& context, const SegmentSource& source,
+                                       const EdgePoint& x_b, Sampler& sampler, RayCounter& rays);
 
 } // namespace penumbra

@@ -1,6 +1,7 @@
 #include "diff/direct_boundary.h"
 
 #include "diff/detector_subpath.h"
+#include "render/light_medium.h"
 #include "scene/shape_interaction.h"
 
 namespace penumbra {
@@ -51,9 +52,9 @@ void check_emission_jumps(const Scene& scene, const Parameters& params) {
 
 } // namespace
 
-BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edges, const MaterialForm& form, int t_min,
-                                       int t_max, const PathSettings& settings, const BoundarySampleIndex& index,
-                                       Sampler& sampler, RayCounter& rays) {
+BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edges, const SegmentContext& context,
+                                       int t_min, int t_max, const PathSettings& settings,
+                                       const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
     BoundarySample out;
     // An emitter, a point on one of the edges that can cast its shadows (the stratified number, rescaled by the
     // emitter selection, stratifies the edge points), and a light point: point lights at their position, area
@@ -88,13 +89,20 @@ BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edg
         }
     }
 
-    const BoundarySegment seg = trace_boundary_segment(scene, form, light, x_b, rays);
+    if (context.media) {
+        const Vec3f origin = light.infinite ? scene.bounding_sphere().center - light.d * (4.f * scene.bounding_sphere().radius + 1.f)
+                                            : light.p;
+        light.medium = emitter_medium(scene, *emitter, origin, rays);
+    }
+
+    const BoundarySegment seg = trace_boundary_segment(scene, context, light, x_b, sampler, rays);
     if (!seg.valid) return out;
     DetectorConnections connections;
-    detector_connections(scene, seg.receiver, seg.dark_point, t_min, t_max, settings, sampler, rays, connections);
-    // The segment's factor: incident term × |cos| at x_D0 × dℓ(x_D0)/dℓ(x_B), over the edge and light densities.
-    const Color3f factor =
-        incident(*emitter, light, seg.receiver.p) * (seg.cos_receiver * seg.stretch * shadow_edges.total_length / light_pdf);
+    detector_connections(scene, seg, t_min, t_max, settings, sampler, rays, connections);
+    // The segment's factor: incident term × |cos| at x_D0 × dℓ(x_D0)/dℓ(x_B) (at a medium vertex: × 1 ×
+    // dA(x_D0)/(dℓ(x_B) dr_D)) × its transmittance (and free-flight weight), over the edge and light densities.
+    const Color3f factor = incident(*emitter, light, seg.receiver.p) * seg.transmittance *
+                           (seg.cos_receiver * seg.stretch * shadow_edges.total_length / light_pdf);
     for (int k = 0; k < connections.count; ++k) {
         const CameraConnection& c = connections.items[k];
         out.add_splat(c.s, factor * c.weight, seg.velocity_at_depth(c.t));
@@ -113,8 +121,9 @@ Image DirectBoundary::derivative(const Parameters& params, const BoundaryOptions
     if (edges_.empty() || scene_.emitters.empty())
         return Image(scene_.sensor->film->width, scene_.sensor->film->height);
     const MaterialForm form(scene_, params, options.first_vertex);
+    const SegmentContext context{form, options.volume_endpoints, edges_.media};
     return boundary_derivative(scene_, params, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
-        return sample_emitter_boundary(scene_, edges_, form, 0, 0, options.path, index, sampler, rays);
+        return sample_emitter_boundary(scene_, edges_, context, 0, 0, options.path, index, sampler, rays);
     });
 }
 
@@ -123,8 +132,9 @@ void DirectBoundary::gradient(const Parameters& params, const Image& adjoint, co
     check_emission_jumps(scene_, params);
     if (edges_.empty() || scene_.emitters.empty()) return;
     const MaterialForm form(scene_, params, options.first_vertex);
+    const SegmentContext context{form, options.volume_endpoints, edges_.media};
     boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
-        return sample_emitter_boundary(scene_, edges_, form, 0, 0, options.path, index, sampler, rays);
+        return sample_emitter_boundary(scene_, edges_, context, 0, 0, options.path, index, sampler, rays);
     }, gradient);
 }
 

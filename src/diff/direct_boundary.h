@@ -5,7 +5,9 @@
 // with W_j the camera importance (filter at the projection times |ds/dA|), v the velocity of the shadow
 // curve relative to the receiver's material motion and n_shadow its normal pointing into the shadow. It is
 // sampled from edge points x_B (uniform by length) and emitter samples y, extending y -> x_B to the receiver,
-// with dℓ(x_D) = |dx_D/dx_B| dℓ(x_B) along the edge (diff/boundary_segment.h).
+// with dℓ(x_D) = |dx_D/dx_B| dℓ(x_B) along the edge (diff/boundary_segment.h). In participating media the
+// segment carries its transmittance and may end at a medium vertex on the shadow sheet behind the edge
+// (σ_s, the phase function toward the camera, no cosine; diff/boundary_segment.h gives the sheet's measure).
 #pragma once
 #include "diff/boundary_driver.h"
 #include "diff/boundary_segment.h"
@@ -16,9 +18,10 @@ namespace penumbra {
 // One boundary sample whose source endpoint is an emitter sample, with the detector subpath's camera
 // connections at depths t_min..t_max (diff/detector_subpath.h): the direct term uses t = 0 only, the
 // indirect term t ≥ 1.
-BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edges, const MaterialForm& form, int t_min,
-                                       int t_max, const PathSettings& settings, const BoundarySampleIndex& index,
-                                       Sampler& sampler, RayCounter& rays);
+// In media the segment leaves the light in the emitter's medium (render/light_medium.h).
+BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edges, const SegmentContext& context,
+                                       int t_min, int t_max, const PathSettings& settings,
+                                       const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays);
 
 class DirectBoundary final : public BoundaryTerm {
 public:

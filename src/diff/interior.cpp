@@ -47,11 +47,13 @@ FilmSample sample_film(const ReconstructionFilter& filter, Sampler& sampler, boo
 // importance sampling, as the renderer does (stratified over the pixel's samples), and its ray stays fixed;
 // x1(θ) slides along it with the surface (MaterialForm::ray_vertex). The camera factor W_j / p is the renderer's sample weight, independent of θ.
 Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sampler& sampler, int x, int y,
-                               const PixelStratum& stratum, bool media, const PathSettings& settings, RayCounter& rays) {
+                               const PixelStratum& stratum, bool media, bool bidirectional, const PathSettings& settings,
+                               RayCounter& rays) {
     const Sensor& sensor = *scene.sensor;
     const Vec2f pos = sensor.film->sample_position(x, y, stratum(sampler.next_2d()));
     const auto [ray, ray_weight] = sensor.sample_ray(pos, sampler.next_2d());
     ++rays.rays;
+    if (bidirectional) return bidirectional_camera_path(scene, form, sampler, ray, ray_weight, {}, 1.f, settings, rays);
     if (media) return volumetric_camera_path(scene, form, sampler, ray, ray_weight, {}, 1.f, settings, rays);
     const SurfaceInteraction3f first = scene.intersect(ray);
     if (!first.is_valid())
@@ -66,10 +68,10 @@ Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sam
 // W_j / p = P_j(s(θ)) |ds/dA|(θ) J(p1) / (p_s |ds/dA|(θ0)) (the pinhole importance of Eqs. 22-23 written on the
 // film, P_j the normalized reconstruction filter of pixel j, s the projection of x1).
 Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sampler& sampler, int x, int y,
-                                const PixelStratum& stratum, bool mirror, bool media, const PathSettings& settings,
-                                RayCounter& rays) {
+                                const PixelStratum& stratum, bool mirror, bool media, bool bidirectional,
+                                const PathSettings& settings, RayCounter& rays) {
     if (form.image_space_first_vertex())
-        return sample_image_space(scene, form, sampler, x, y, stratum, media, settings, rays);
+        return sample_image_space(scene, form, sampler, x, y, stratum, media, bidirectional, settings, rays);
     const Sensor& sensor = *scene.sensor;
     const ReconstructionFilter& filter = *sensor.film->rfilter;
     const FilmSample fs = sample_film(filter, sampler, mirror);
@@ -77,7 +79,7 @@ Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sa
     const auto [ray, ray_weight] = sensor.sample_ray(center + fs.offset, sampler.next_2d());
     ++rays.rays;
     const Vec3f camera = sensor.to_world.apply_point(Vec3f(0.f));
-    if (media) {
+    if (media || bidirectional) {
         // W_j / p = P_j(s(θ)) |ds/dA|(θ) J / (p_s |ds/dA|(θ0)); a medium vertex's |ds/dA| has the normal
         // toward the camera (|ds/dω| / ℓ², the volume measure).
         const CameraFactor factor = [&](const Vec3<Var>& p, const Vec3<Var>& n, const Var& jacobian) {
@@ -87,8 +89,10 @@ Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sa
             if (!sensor.film_position(p_cam, form.direction_to_reference_camera(n), s, film_jacobian)) return Var(0.f);
             return sensor.film->filter_weight(x, y, s) * relative_change(film_jacobian * jacobian) / Var(fs.pdf);
         };
-        return volumetric_camera_path(scene, form, sampler, ray, ray_weight, factor,
-                                      sensor.film->filter_weight(x, y, center + fs.offset) / fs.pdf, settings, rays);
+        const float escaped = sensor.film->filter_weight(x, y, center + fs.offset) / fs.pdf;
+        if (bidirectional)
+            return bidirectional_camera_path(scene, form, sampler, ray, ray_weight, factor, escaped, settings, rays);
+        return volumetric_camera_path(scene, form, sampler, ray, ray_weight, factor, escaped, settings, rays);
     }
     const SurfaceInteraction3f first = scene.intersect(ray);
     if (!first.is_valid()) {
@@ -127,6 +131,7 @@ PixelSums forward_batch(const Scene& scene, const Parameters& params, const Diff
     const MaterialForm form(scene, params, options.first_vertex);
     const bool antithetic = options.antithetic && !form.image_space_first_vertex();
     const bool media = scene_has_media(scene);
+    const bool bidirectional = bidirectional_interior(scene, options.estimator);
     const PathSettings settings = options.path;
     for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
         Sampler sampler(*scene.sensor->sampler, antithetic ? (options.spp + 1) / 2 : options.spp);
@@ -144,7 +149,7 @@ PixelSums forward_batch(const Scene& scene, const Parameters& params, const Diff
                     sampler.start(seed, pixel, uint64_t(antithetic ? m / 2 : m));
                     tape.clear();
                     const PixelStratum stratum(m, options.spp, seed, pixel);
-                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, media, settings, rays);
+                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, media, bidirectional, settings, rays);
                     tape_nodes += tape.size();
                     if (!finite(c)) continue;
                     tape.forward(params.direction().data(), tangent);
@@ -177,6 +182,7 @@ void require_no_media(const Scene& scene) {
 DerivativeImage render_derivative(const Scene& scene, const Parameters& params, const DiffOptions& options) {
     check_ready(scene, params);
     if (options.spp <= 0 || options.batches <= 0) throw Error("derivative: spp and batches must be positive");
+    if (bidirectional_interior(scene, options.estimator)) require_bidirectional_support(scene);
     const auto start = std::chrono::steady_clock::now();
     const int B = options.batches;
     ImageBatches primal, derivative;
@@ -205,9 +211,14 @@ Gradient render_gradient(const Scene& scene, const Parameters& params, const Ima
     const MaterialForm form(scene, params, options.first_vertex);
     const bool antithetic = options.antithetic && !form.image_space_first_vertex();
     const bool media = scene_has_media(scene);
+    const bool bidirectional = bidirectional_interior(scene, options.estimator);
+    if (bidirectional) require_bidirectional_support(scene);
     const size_t dim = size_t(params.dimension());
     tbb::enumerable_thread_specific<std::vector<double>> gradients([dim] { return std::vector<double>(dim, 0.0); });
-    Gradient result{std::vector<double>(dim, 0.0), Image(film.width, film.height), 0.0, {}};
+    Gradient result{std::vector<double>(dim, 0.0), {}, Image(film.width, film.height), 0.0, {}};
+    for (const std::string& shape : form.volume_motion().omitted())
+        result.warnings.push_back("the medium around '" + shape + "' does not follow its vertex_positions (" +
+                                  "it touches another shape): their gradient misses the medium's motion");
     const float inv_spp = 1.f / float(options.spp);
     SharedSampleCost cost;
 
@@ -230,7 +241,7 @@ Gradient render_gradient(const Scene& scene, const Parameters& params, const Ima
                     sampler.start(options.seed, pixel, uint64_t(antithetic ? m / 2 : m));
                     tape.clear();
                     const PixelStratum stratum(m, options.spp, options.seed, pixel);
-                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, media, options.path, rays);
+                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, media, bidirectional, options.path, rays);
                     tape_nodes += tape.size();
                     if (!finite(c)) continue;
                     primal += Vec3d(c.x.v, c.y.v, c.z.v);

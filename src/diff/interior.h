@@ -4,6 +4,7 @@
 //   reverse mode  dL/dθ = Σ_pixels ∂L/∂I · dI/dθ for every enabled parameter (a gradient vector).
 #pragma once
 #include "core/image.h"
+#include "diff/bdpt_interior.h"
 #include "diff/first_vertex.h"
 #include "diff/parameters.h"
 #include "diff/sample_cost.h"
@@ -21,6 +22,7 @@ struct DiffOptions {
     FirstVertex first_vertex = FirstVertex::Auto; // diff/first_vertex.h
     int batches = 1;           // independent batches, for per-pixel standard errors (forward mode)
     PathSettings path;         // depth limits of the path sampler
+    InteriorEstimator estimator = InteriorEstimator::Auto; // diff/bdpt_interior.h
     std::function<void(float)> progress;
 };
 
@@ -35,6 +37,7 @@ struct DerivativeImage {
 
 struct Gradient {
     std::vector<double> values; // dL/dθ, one per enabled parameter scalar
+    std::vector<std::string> warnings; // terms the estimate leaves out (shown to the user)
     Image primal;
     double seconds = 0;
     SampleCost cost;

@@ -75,6 +75,7 @@ struct MethodGradient {
     std::vector<double> values; // dL/dθ per enabled parameter scalar
     Image primal;               // the image the method estimated on the way (may be empty)
     std::string description;
+    std::vector<std::string> warnings; // what the estimate leaves out, for the user
     double loss = std::numeric_limits<double>::quiet_NaN(); // loss_gradient: the loss of its primal image
     double seconds = 0;
 };

@@ -1,6 +1,9 @@
 #include "diff/pixel_boundary.h"
 
 #include "diff/material_form.h"
+#include "diff/media_radiance.h"
+#include "render/light_medium.h"
+#include "render/volume_visibility.h"
 
 #include <cmath>
 
@@ -31,9 +34,9 @@ struct PixelEdges {
 // same offset along the edge and the same random numbers for the path traced there (the sampler is restarted
 // per row/column and stratum), so that what flows in through one edge and out through the other cancels
 // sample by sample where the image is smooth, instead of only in expectation.
-BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, const PixelEdges& grid,
-                                 const PathSettings& settings, uint64_t seed, uint64_t i, Sampler& sampler,
-                                 RayCounter& rays) {
+BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, bool media,
+                                 const PixelEdges& grid, const PathSettings& settings, uint64_t seed, uint64_t i,
+                                 Sampler& sampler, RayCounter& rays) {
     BoundarySample out;
     const Sensor& sensor = *scene.sensor;
     const int W = grid.width, H = grid.height;
@@ -56,17 +59,30 @@ BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, c
     // takes the mean of the two, so L is taken just off the edge on a random side.
     const Vec2f side = across * (sampler.next_1d() < 0.5f ? -1e-4f : 1e-4f);
     const auto [ray, ray_weight] = sensor.sample_ray(s + side, sampler.next_2d());
-    ++rays.rays;
-    const SurfaceInteraction3f hit = scene.intersect(ray);
-    if (!hit.is_valid()) return out; // the environment seen directly does not move with the geometry
-    const Color3f L = trace_path<float>(scene, sampler, ray, hit, hit, ReferenceGeometry{}, settings, rays) * ray_weight;
+    // In media the first vertex is where a free flight along the ray ends (a medium vertex moves by the volume
+    // motion, a surface point by its shape's).
+    Color3f L;
+    Vec3<Var> x;
+    if (media) {
+        const ArrivingRadiance a = arriving_radiance(scene, ray, sensor_medium(scene), settings, sampler, rays);
+        if (a.end.kind == FlightEnd::Kind::Medium) x = form.volume_motion().position(a.end.p, a.end.medium, nullptr);
+        else if (a.end.kind == FlightEnd::Kind::Surface) x = form.vertex(a.end.si).p;
+        else return out; // the environment seen directly does not move with the geometry
+        L = a.radiance * ray_weight;
+    } else {
+        ++rays.rays;
+        const SurfaceInteraction3f hit = scene.intersect(ray);
+        if (!hit.is_valid()) return out; // the environment seen directly does not move with the geometry
+        L = trace_path<float>(scene, sampler, ray, hit, hit, ReferenceGeometry{}, settings, rays) * ray_weight;
+        x = form.vertex(hit).p;
+    }
     if (is_black(L)) return out;
 
     // ṡ · across for the material point seen at s.
     const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
     Vec2<Var> s_t;
     Var jacobian;
-    if (!sensor.film_position(form.to_reference_camera(form.vertex(hit).p, eye), Vec3<Var>(Vec3f(0.f, 0.f, 1.f)), s_t, jacobian))
+    if (!sensor.film_position(form.to_reference_camera(x, eye), Vec3<Var>(Vec3f(0.f, 0.f, 1.f)), s_t, jacobian))
         return out;
     const Var velocity = is_vertical ? s_t.x - Var(s.x) : s_t.y - Var(s.y);
 
@@ -94,9 +110,10 @@ Image PixelBoundary::derivative(const Parameters& params, const BoundaryOptions&
     const Film& film = *scene_.sensor->film;
     if (!needs_pixel_boundary(scene_, params, options.first_vertex)) return Image(film.width, film.height);
     const MaterialForm form(scene_, params, options.first_vertex);
+    const bool media = scene_has_media(scene_);
     const PixelEdges grid = pixel_edges(film, options);
     return boundary_derivative(scene_, params, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
-        return sample_pixel_edge(scene_, form, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
+        return sample_pixel_edge(scene_, form, media, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
     }, grid.samples());
 }
 
@@ -104,9 +121,10 @@ void PixelBoundary::gradient(const Parameters& params, const Image& adjoint, con
                              std::vector<double>& gradient) const {
     if (!needs_pixel_boundary(scene_, params, options.first_vertex)) return;
     const MaterialForm form(scene_, params, options.first_vertex);
+    const bool media = scene_has_media(scene_);
     const PixelEdges grid = pixel_edges(*scene_.sensor->film, options);
     boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
-        return sample_pixel_edge(scene_, form, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
+        return sample_pixel_edge(scene_, form, media, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
     }, gradient, grid.samples());
 }
 

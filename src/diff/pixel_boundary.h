@@ -8,7 +8,8 @@
 // Film::filter_weight): the term then runs over the film's edge alone. The image-space first vertex needs
 // none (its filter does not move; diff/first_vertex.h). Points are stratified along every pixel edge, with
 // the same offsets and random numbers on a pixel's opposite edges; each interior edge point contributes to
-// the two pixels it separates.
+// the two pixels it separates. In participating media the material point seen at s is where a free flight along
+// the camera ray ends (diff/media_radiance.h): a medium vertex, moving by the volume motion, or a surface.
 #pragma once
 #include "core/image.h"
 #include "diff/boundary_driver.h"

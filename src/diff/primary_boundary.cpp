@@ -2,6 +2,9 @@
 
 #include "core/distribution.h"
 #include "diff/material_form.h"
+#include "diff/media_radiance.h"
+#include "diff/media_walk.h"
+#include "render/volume_visibility.h"
 #include "diff/shading_terminator.h"
 #include "scene/texture.h"
 
@@ -40,6 +43,7 @@ struct PrimaryBoundary::Silhouettes {
     // uniform in a triangle.
     DiscreteDistribution distribution;
     bool image_space = false;
+    bool media = false; // the scene has participating media: the sides' radiances are volumetric
 };
 
 namespace {
@@ -144,6 +148,7 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
     auto result = std::make_unique<Silhouettes>();
     Silhouettes& out = *result;
     out.image_space = image_space;
+    out.media = edges.media;
     const Shape* textured_shape = nullptr; // the shape `textured` was last found for (edges come shape by shape)
     bool textured = false;
     for (const SceneEdges::SceneEdge& se : edges.edges) {
@@ -207,6 +212,13 @@ Side classify(const SurfaceInteraction3f& hit, const Shape& shape, float edge_di
     return beyond ? Side::Far : Side::Front;
 }
 
+// What a camera ray sees: its first surface, crossing index-matched (null) boundaries in scenes with media.
+SurfaceInteraction3f seen_surface(const Scene& scene, const Ray& ray, bool media, RayCounter& rays) {
+    if (media) return first_opaque_hit(scene, ray, rays);
+    ++rays.rays;
+    return scene.intersect(ray);
+}
+
 // Where an edge's image crosses the film at fraction t: the film point s, the image-space normal n from side 1
 // (the edge's own surface) to side 2 (the background of a silhouette, the other face of a crease), and the
 // two sides' primary rays and hits.
@@ -214,6 +226,7 @@ struct EdgeCrossing {
     bool valid = false;
     Vec2f s, n;
     float tau = 0.f; // the edge parameter (v0 → v1) of the 3D point seen at s
+    Vec3f x_edge;    // that point
     Ray ray[2];
     SurfaceInteraction3f hit[2];
     Color3f weight[2];
@@ -230,8 +243,8 @@ float probe_offset(const Sensor& sensor, const Vec3f& x, const Vec2f& s, const V
     return std::clamp(clearance / world_per_pixel, 1e-3f, 0.05f);
 }
 
-EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& se, float t, Sampler& sampler,
-                        RayCounter& rays) {
+EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& se, bool media, float t,
+                        Sampler& sampler, RayCounter& rays) {
     EdgeCrossing out;
     const Sensor& sensor = *scene.sensor;
     out.s = se.s0 + (se.s1 - se.s0) * t;
@@ -241,6 +254,7 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
     const Vec2f n2 = Vec2f(-dir.y, dir.x) / std::sqrt(dir.x * dir.x + dir.y * dir.y);
     const Vec3f p0 = se.shape->mesh.positions[se.edge.v0], p1 = se.shape->mesh.positions[se.edge.v1];
     const Vec3f x_edge = p0 + (p1 - p0) * out.tau;
+    out.x_edge = x_edge;
 
     // The two sides, probed at s ± eps n2. The radiances are the limits at the edge, but rays leaving a probed
     // point start RayEpsilon-scaled offsets off its surface: a shadow ray toward a light at (or near) the camera
@@ -253,10 +267,9 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
     Side sides[2];
     for (int k = 0; k < 2; ++k) {
         std::tie(out.ray[k], out.weight[k]) = sensor.sample_ray(out.s + n2 * (k == 0 ? eps : -eps), sampler.next_2d());
-        out.hit[k] = scene.intersect(out.ray[k]);
+        out.hit[k] = seen_surface(scene, out.ray[k], media, rays);
         sides[k] = classify(out.hit[k], *se.shape, norm(x_edge - out.ray[k].o));
     }
-    rays.rays += 2;
     out.n = n2 * -1.f; // from side 0 (probed at +eps) to side 1
     if (se.crease) {
         // A crease is seen where both sides are the edge's own faces at the edge's depth (a convex ridge recedes
@@ -280,14 +293,53 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
     return out;
 }
 
+// The radiance seen along a camera ray up to its surface `hit`: path tracing in vacuum; in media the
+// transmittance from the camera times the radiance leaving the surface (its emission unless hidden).
+Color3f seen_radiance(const Scene& scene, const Ray& ray, const SurfaceInteraction3f& hit, bool media,
+                      const PathSettings& settings, Sampler& sampler, RayCounter& rays) {
+    if (!media) return trace_path<float>(scene, sampler, ray, hit, hit, ReferenceGeometry{}, settings, rays);
+    if (!hit.is_valid()) return Color3f(0.f);
+    const Medium* medium = sensor_medium(scene);
+    Ray to_hit = ray;
+    to_hit.tmax = hit.t * 0.999f;
+    const Color3f tr = walk_transmittance(scene, to_hit, medium, sampler, rays);
+    if (is_black(tr)) return tr;
+    return tr * vertex_radiance(scene, {hit, ray.d * -1.f, medium}, settings.max_depth, !settings.hide_emitters,
+                                settings, sampler, rays);
+}
+
+// The far side of a silhouette in media: what lies beyond the edge's depth along the far probe (Algorithm 1's
+// sampleInteraction from the edge on: a medium vertex, the background surface, or the environment), times the
+// transmittance from the camera to the edge.
+ArrivingRadiance far_side(const Scene& scene, const EdgeCrossing& c, const PathSettings& settings, Sampler& sampler,
+                          RayCounter& rays) {
+    const Ray& ray = c.ray[1];
+    const float depth = norm(c.x_edge - ray.o);
+    const Medium* medium = sensor_medium(scene);
+    const Color3f tr = walk_transmittance(scene, Ray(ray.o, ray.d, depth), medium, sampler, rays);
+    if (is_black(tr)) return {};
+    ArrivingRadiance out = arriving_radiance(scene, Ray(ray(depth), ray.d), medium, settings, sampler, rays);
+    out.radiance *= tr;
+    return out;
+}
+
 // The jump of the pixel integrand across the edge: L_1 − L_2 with the image-space first vertex; −L_2 in material
 // form, where the edge's own side is the interior term's (its material domain is not cut). Path-traced
-// estimates of the radiance seen on either side.
-Color3f jump(const Scene& scene, const EdgeCrossing& c, bool image_space, const PathSettings& settings,
-             Sampler& sampler, RayCounter& rays) {
-    const Color3f L_2 = trace_path<float>(scene, sampler, c.ray[1], c.hit[1], c.hit[1], ReferenceGeometry{}, settings, rays) * c.weight[1];
+// estimates of the radiance seen on either side; in media the in-scattering in front of the edge, common to both
+// sides, is left out (only the far side beyond the edge's depth, `far`, is estimated; in material form the
+// medium's points in front of the edge are not cut either).
+Color3f jump(const Scene& scene, const EdgeCrossing& c, bool image_space, bool media, const PathSettings& settings,
+             Sampler& sampler, RayCounter& rays, ArrivingRadiance* far = nullptr) {
+    Color3f L_2;
+    if (media) {
+        const ArrivingRadiance f = far_side(scene, c, settings, sampler, rays);
+        L_2 = f.radiance * c.weight[1];
+        if (far) *far = f;
+    } else {
+        L_2 = trace_path<float>(scene, sampler, c.ray[1], c.hit[1], c.hit[1], ReferenceGeometry{}, settings, rays) * c.weight[1];
+    }
     if (!image_space) return L_2 * -1.f;
-    return trace_path<float>(scene, sampler, c.ray[0], c.hit[0], c.hit[0], ReferenceGeometry{}, settings, rays) * c.weight[0] - L_2;
+    return seen_radiance(scene, c.ray[0], c.hit[0], media, settings, sampler, rays) * c.weight[0] - L_2;
 }
 
 // One sample of the shading terminator of a triangle (diff/shading_terminator.h; the image-space first vertex):
@@ -334,8 +386,7 @@ BoundarySample sample_terminator(const Scene& scene, const Silhouettes& sil, con
         // The curve point must be what the camera sees (a terminator on the far side of a solid lies within a few
         // percent of the near side's depth next to its silhouette): the ray through s meets this triangle first.
         const Ray ray = sensor.sample_ray(s, Vec2f(0.5f)).first;
-        const SurfaceInteraction3f center = scene.intersect(ray);
-        ++rays.rays;
+        const SurfaceInteraction3f center = seen_surface(scene, ray, sil.media, rays);
         if (!center.is_valid() || center.shape != tt.shape || center.prim_index != tt.prim) continue;
         // The radiance on either side, 0.01 pixel off the curve: the same surface on both, within 10% of the
         // curve point's depth (the terminator lies next to silhouettes, where the surface is seen at grazing
@@ -344,11 +395,10 @@ BoundarySample sample_terminator(const Scene& scene, const Silhouettes& sil, con
         bool seen = true;
         for (int side = 0; side < 2 && seen; ++side) {
             const auto [probe, weight] = sensor.sample_ray(s + n_s * (side == 0 ? 0.01f : -0.01f), sampler.next_2d());
-            const SurfaceInteraction3f hit = scene.intersect(probe);
-            ++rays.rays;
+            const SurfaceInteraction3f hit = seen_surface(scene, probe, sil.media, rays);
             seen = hit.is_valid() && hit.shape == tt.shape && std::abs(hit.t - center.t) < 0.1f * center.t;
             if (seen)
-                L[side] = trace_path<float>(scene, sampler, probe, hit, hit, ReferenceGeometry{}, settings, rays) * weight;
+                L[side] = seen_radiance(scene, probe, hit, sil.media, settings, sampler, rays) * weight;
         }
         if (!seen) continue;
         // Next to a silhouette the primary term probes its near side probe_offset() inside: where the terminator's
@@ -356,8 +406,7 @@ BoundarySample sample_terminator(const Scene& scene, const Silhouettes& sil, con
         // is left to it (a dark strip of that width between two terminator branches moves as one, its two
         // curves' terms cancelling).
         const SurfaceInteraction3f dark =
-            scene.intersect(sensor.sample_ray(s - n_s * probe_offset(sensor, x, s, n_s), Vec2f(0.5f)).first);
-        ++rays.rays;
+            seen_surface(scene, sensor.sample_ray(s - n_s * probe_offset(sensor, x, s, n_s), Vec2f(0.5f)).first, sil.media, rays);
         if (!(dark.is_valid() && dark.shape == tt.shape && std::abs(dark.t - center.t) < 0.1f * center.t &&
               dot(dark.sh_frame.n, eye - dark.p) < 0.f))
             continue;
@@ -376,15 +425,15 @@ BoundarySample sample_terminator(const Scene& scene, const Silhouettes& sil, con
 //   image-space first vertex: (L_1 − L_2) ((s_edge(θ) − s) · n);
 //   material form: −L_2 ((s_edge(θ) − s_bg(θ)) · n) for silhouettes, s_bg the background's material point.
 BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const MaterialForm& form,
-                               const BoundarySampleIndex& index, Sampler& sampler, const PathSettings& settings,
-                               RayCounter& rays) {
+                               const BoundarySampleIndex& index, Sampler& sampler,
+                               const PathSettings& settings, RayCounter& rays) {
     BoundarySample out;
     const Sensor& sensor = *scene.sensor;
     float t = index.stratified(sampler);
     const size_t e = sil.distribution.sample(t);
     if (e >= sil.edges.size()) return sample_terminator(scene, sil, form, e, t, sampler, settings, rays);
     const Silhouettes::SilhouetteEdge& se = sil.edges[e];
-    const EdgeCrossing c = cross_edge(scene, se, t, sampler, rays);
+    const EdgeCrossing c = cross_edge(scene, se, sil.media, t, sampler, rays);
     if (!c.valid) return out;
 
     // Velocity of the edge point (a fixed point on the moving edge, Eq. 47 of paper 001) in image space.
@@ -395,14 +444,22 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
     Vec2<Var> s_e, s_b(Var(c.s.x), Var(c.s.y));
     Var j;
     if (!sensor.film_position(form.to_reference_camera(x_e, eye), view, s_e, j)) return out;
-    // Material form: the background's material point moves too (Eq. 50).
-    if (!sil.image_space && c.hit[1].is_valid() &&
-        !sensor.film_position(form.to_reference_camera(form.vertex(c.hit[1]).p, eye), view, s_b, j))
-        return out;
+    ArrivingRadiance far;
+    const Color3f value = jump(scene, c, sil.image_space, sil.media, settings, sampler, rays, &far);
+    // Material form: the background's material point moves too (Eq. 50); in media, the far side's vertex (a
+    // medium vertex by the volume motion; the environment does not move).
+    if (!sil.image_space) {
+        const bool surface = sil.media ? far.end.kind == FlightEnd::Kind::Surface : c.hit[1].is_valid();
+        const bool medium = sil.media && far.end.kind == FlightEnd::Kind::Medium;
+        if (surface || medium) {
+            const Vec3<Var> x_b = medium ? form.volume_motion().position(far.end.p, far.end.medium, nullptr)
+                                         : form.vertex(sil.media ? far.end.si : c.hit[1]).p;
+            if (!sensor.film_position(form.to_reference_camera(x_b, eye), view, s_b, j)) return out;
+        }
+    }
     // Density per unit length of the film-space edge: the edge's probability over its projected length.
     const float inv_pdf = sil.lengths[e] / sil.distribution.pmf(e);
-    out.add_splat(c.s, jump(scene, c, sil.image_space, settings, sampler, rays) * inv_pdf,
-                  (s_e.x - s_b.x) * Var(c.n.x) + (s_e.y - s_b.y) * Var(c.n.y));
+    out.add_splat(c.s, value * inv_pdf, (s_e.x - s_b.x) * Var(c.n.x) + (s_e.y - s_b.y) * Var(c.n.y));
     return out;
 }
 
@@ -430,9 +487,9 @@ void guide(const Scene& scene, Silhouettes& sil, const BoundaryOptions& options)
             for (int k = 0; k < per_edge; ++k) {
                 sampler.start(options.seed ^ GuideSalt, e, uint64_t(k));
                 const float t = (float(k) + sampler.next_1d()) / float(per_edge);
-                const EdgeCrossing c = cross_edge(scene, sil.edges[e], t, sampler, rays);
+                const EdgeCrossing c = cross_edge(scene, sil.edges[e], sil.media, t, sampler, rays);
                 if (!c.valid) continue;
-                const Color3f j = jump(scene, c, sil.image_space, options.path, sampler, rays);
+                const Color3f j = jump(scene, c, sil.image_space, sil.media, options.path, sampler, rays);
                 sum2 += sqr(double(j.x) + j.y + j.z);
             }
             rms[e] = float(std::sqrt(sum2 / per_edge));

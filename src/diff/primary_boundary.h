@@ -8,6 +8,11 @@
 // with u the image-space velocities of the edge point and of the background's material point seen next to it,
 // n the image-space normal pointing from side a (the occluder) to side b (the background), and L the radiance
 // seen on either side. Edges are sampled by the length of their image within the film.
+//
+// Through participating media the camera segment carries its transmittance to the edge (common to both sides),
+// and the far side of a silhouette is what a free flight from the edge's depth on meets: a medium vertex (the
+// primary shadow sheet behind the edge; in material form its point moves by the volume motion) or the
+// background surface; the in-scattering in front of the edge is the same on both sides and is left out.
 #pragma once
 #include "core/image.h"
 #include "diff/boundary_driver.h"

@@ -28,6 +28,7 @@ void boundary_batches(const Scene& scene, const Parameters& params, const PsdrOp
         bo.path = options.interior.path;
         bo.first_vertex = options.interior.first_vertex;
         bo.guiding = options.guiding;
+        bo.volume_endpoints = options.volume_boundary;
         bo.cost = &cost;
         batches.add(term.derivative(params, bo));
     }
@@ -129,6 +130,7 @@ Gradient psdr_gradient(const Scene& scene, const Parameters& params, const Image
     bo.path = options.interior.path;
     bo.first_vertex = options.interior.first_vertex;
     bo.guiding = options.guiding;
+    bo.volume_endpoints = options.volume_boundary;
     bo.cost = &g.cost;
     const BoundaryTerms boundary(scene, options);
     for (const BoundaryTerms::Term& t : boundary.terms()) {

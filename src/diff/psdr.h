@@ -2,7 +2,8 @@
 // term (diff/interior.h) plus the boundary terms: primary (camera segments, diff/primary_boundary.h), direct
 // (emitter segments seen by the camera, diff/direct_boundary.h) and indirect (every other boundary segment,
 // diff/indirect_boundary.h), plus the pixel-boundary term of a box filter (diff/pixel_boundary.h). Each term's
-// image is kept for validation against finite differences.
+// image is kept for validation against finite differences. In participating media the boundary segments may end
+// at medium vertices (shadow sheets; PsdrOptions::volume_boundary).
 #pragma once
 #include "diff/interior.h"
 #include "diff/direct_boundary.h"
@@ -22,6 +23,8 @@ struct PsdrOptions {
     int indirect_spp = 4;     // indirect boundary samples per pixel and technique (per batch); 0 disables it
     int pixel_spp = 4;        // pixel-boundary samples per pixel (per batch; box or cut filters); 0: off
     bool guiding = true;      // contrast-guided sampling of the primary term's edges (always mixed with uniform)
+    bool volume_boundary = true; // boundary segments may end at medium vertices (false: surface endpoints only,
+                                 // the DTRT-like baseline that misses shadow sheets in media)
 };
 
 struct PsdrDerivative {

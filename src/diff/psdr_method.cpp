@@ -25,6 +25,12 @@ const MethodOption FirstVertexOption{
     "(material points; the filter and pixel edges move) or auto (image unless the camera moves or a moving "
     "surface has a checkerboard/nearest texture)",
     {"auto", "image", "material"}};
+const MethodOption InteriorEstimatorOption{
+    "interior-estimator",
+    Type::String,
+    "estimator of the interior term: unidirectional (path tracing), bidirectional (bdpt's strategies with "
+    "t >= 2, diff/bdpt_interior.h) or auto (bidirectional when the scene's integrator is bdpt)",
+    {"auto", "unidirectional", "bidirectional"}};
 const MethodOption NoAntitheticOption{
     "no-antithetic", Type::Bool, "disable pixel-level antithetic sampling", {}};
 
@@ -33,7 +39,9 @@ class PsdrMethod final : public DerivativeMethod {
     PsdrMethod(const MethodOptions& o, bool boundary) : boundary_(boundary) {
         first_vertex_ = parse_first_vertex(o.get_string("first-vertex", "auto"));
         antithetic_ = !o.get_bool("no-antithetic", false);
+        estimator_ = parse_interior_estimator(o.get_string("interior-estimator", "auto"));
         guiding_ = !o.get_bool("no-guiding", false);
+        volume_boundary_ = !o.get_bool("no-volume-boundary", false);
         const int fallback = o.get_int("boundary-spp", -1);
         manual_ = fallback >= 0;
         for (size_t k = 0; k < term_spp_.size(); ++k) {
@@ -69,6 +77,7 @@ class PsdrMethod final : public DerivativeMethod {
         const Gradient g = psdr_gradient(scene, params, adjoint, o);
         MethodGradient out;
         out.values = g.values;
+        out.warnings = g.warnings;
         out.primal = g.primal;
         out.description = describe(scene, params, o);
         out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -90,8 +99,10 @@ class PsdrMethod final : public DerivativeMethod {
         o.interior.antithetic = antithetic_;
         o.interior.path = path_settings(scene);
         o.interior.first_vertex = first_vertex_;
+        o.interior.estimator = estimator_;
         o.primary_spp = o.direct_spp = o.indirect_spp = o.pixel_spp = 0;
         o.guiding = guiding_;
+        o.volume_boundary = volume_boundary_;
         if (!boundary_) return o;
         if (manual_) {
             int* spp[4] = {&o.primary_spp, &o.direct_spp, &o.indirect_spp, &o.pixel_spp};
@@ -128,7 +139,9 @@ class PsdrMethod final : public DerivativeMethod {
         const std::string vertex = image_space_first_vertex(scene, params, o.interior.first_vertex)
                                        ? "image-space"
                                        : "material-form";
-        if (!boundary_) return "interior term, " + vertex + " first vertex";
+        const std::string estimator =
+            bidirectional_interior(scene, o.interior.estimator) ? "bidirectional" : "unidirectional";
+        if (!boundary_) return "interior term (" + estimator + "), " + vertex + " first vertex";
         return "interior + boundary terms (" + describe_budget(o) + (manual_ ? ")" : ", calibrated)");
     }
 
@@ -156,7 +169,8 @@ class PsdrMethod final : public DerivativeMethod {
 
     bool boundary_;
     FirstVertex first_vertex_;
-    bool antithetic_ = true, guiding_ = true, manual_ = false;
+    InteriorEstimator estimator_ = InteriorEstimator::Auto;
+    bool antithetic_ = true, guiding_ = true, volume_boundary_ = true, manual_ = false;
     std::array<int, 4> term_spp_{}; // primary, direct, indirect, pixel; -1: unset
     std::vector<std::pair<Key, PsdrOptions>> calibrated_; // one split per configuration (e.g. per view)
 };
@@ -168,7 +182,7 @@ MethodInfo interior_method_info() {
             "the material-form interior term alone (paper 001 Eq. 19, first term): exact for parameters that "
             "move "
             "no visibility edge",
-            {FirstVertexOption, NoAntitheticOption},
+            {FirstVertexOption, NoAntitheticOption, InteriorEstimatorOption},
             [](const MethodOptions& o) { return std::make_unique<PsdrMethod>(o, false); }};
 }
 
@@ -190,6 +204,7 @@ MethodInfo psdr_method_info() {
             "measurement",
             {FirstVertexOption,
              NoAntitheticOption,
+             InteriorEstimatorOption,
              boundary,
              spp_option("primary"),
              spp_option("direct"),
@@ -198,6 +213,10 @@ MethodInfo psdr_method_info() {
              {"no-guiding",
               Type::Bool,
               "sample the primary term's edges by projected length only (no contrast pilot)",
+              {}},
+             {"no-volume-boundary",
+              Type::Bool,
+              "boundary segments end at surfaces only (no shadow sheets in media: a DTRT-like baseline)",
               {}}},
             [](const MethodOptions& o) { return std::make_unique<PsdrMethod>(o, true); }};
 }

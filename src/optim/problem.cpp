@@ -208,7 +208,10 @@ void InverseProblem::apply() {
 std::vector<double> InverseProblem::gradient(const Image& adjoint, DerivativeMethod& method,
                                              const MethodRun& run, std::string* description) const {
     const MethodGradient g = method.gradient(scene_, *params_, adjoint, run);
-    if (description) *description = g.description;
+    if (description) {
+        *description = g.description;
+        for (const std::string& w : g.warnings) *description += "; warning: " + w;
+    }
     std::vector<double> out(static_cast<size_t>(dimension_));
     for (const Entry& e : entries_) {
         if (e.kind == Kind::Data) {

@@ -88,7 +88,7 @@ std::vector<Layer> BidirectionalPathTracer::render(const Scene& scene, const Ren
         tbb::parallel_for(0, n_chunks, [&](int c) {
             Sampler sampler(*sensor.sampler, spp);
             RayCounter counter;
-            BDPTContext ctx{scene, settings_, sampler, counter, has_media, sensor_connects, bounds};
+            BDPTContext ctx{scene, settings_, sampler, counter, has_media, sensor_connects, bounds, nullptr};
             std::vector<PathVertex> camera, light;
             uint64_t local_dropped = 0;
             const uint64_t begin = n_pixels * c / n_chunks, end = n_pixels * (c + 1) / n_chunks;

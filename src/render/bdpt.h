@@ -9,6 +9,7 @@ class BidirectionalPathTracer final : public Integrator {
     explicit BidirectionalPathTracer(const Properties& props);
     std::vector<Layer> render(const Scene& scene, const RenderOptions& options,
                               RenderStats& stats) const override;
+    const BDPTSettings& settings() const { return settings_; }
 
   private:
     BDPTSettings settings_;

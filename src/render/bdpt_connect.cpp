@@ -2,6 +2,7 @@
 
 #include "render/adjoint_shading.h"
 #include "render/bdpt_mis.h"
+#include "render/bdpt_record.h"
 #include "render/film_footprint.h"
 #include "render/volume_visibility.h"
 
@@ -39,6 +40,12 @@ Ray connection_ray(const PathVertex& v, const Vec3f& target, bool target_on_surf
     return ray;
 }
 
+// The transmittance of a connection (recorded piece by piece when the sample is recorded).
+Color3f connection_transmittance(BDPTContext& ctx, const Ray& ray, const Medium* medium, StrategyRecord* record) {
+    if (!record) return segment_transmittance(ctx.scene, ray, medium, ctx.sampler, ctx.rays);
+    return sample_shadow_chain(ctx.scene, ray, medium, ctx.sampler, record->connection, ctx.rays);
+}
+
 Interaction3f reference(const PathVertex& v) {
     Interaction3f it;
     it.p = v.p;
@@ -69,7 +76,7 @@ Color3f emission_hit(BDPTContext& ctx, const std::vector<PathVertex>& camera, in
 }
 
 // s = 1: z_{t-1} connected to a fresh emitter sample.
-Color3f next_event(BDPTContext& ctx, const std::vector<PathVertex>& camera, int t) {
+Color3f next_event(BDPTContext& ctx, const std::vector<PathVertex>& camera, int t, StrategyRecord* record) {
     const PathVertex& pt = camera[size_t(t - 1)];
     const Vec2f u = ctx.sampler.next_2d();
     if (!connectible(pt)) return Color3f(0.f);
@@ -79,8 +86,8 @@ Color3f next_event(BDPTContext& ctx, const std::vector<PathVertex>& camera, int 
     if (is_black(f)) return Color3f(0.f);
     const Medium* medium = medium_toward(pt, ds.d);
     const bool area = ds.emitter->shape() != nullptr;
-    const Color3f tr =
-        segment_transmittance(ctx.scene, connection_ray(pt, ds.p, area), medium, ctx.sampler, ctx.rays);
+    if (record) record->light_sample = ds;
+    const Color3f tr = connection_transmittance(ctx, connection_ray(pt, ds.p, area), medium, record);
     if (is_black(tr)) return Color3f(0.f);
 
     PathVertex light;
@@ -98,7 +105,7 @@ Color3f next_event(BDPTContext& ctx, const std::vector<PathVertex>& camera, int 
 
 // s >= 2, t >= 2: y_{s-1} connected to z_{t-1}.
 Color3f connect(BDPTContext& ctx, const std::vector<PathVertex>& light, const std::vector<PathVertex>& camera,
-                int s, int t) {
+                int s, int t, StrategyRecord* record) {
     const PathVertex &qs = light[size_t(s - 1)], &pt = camera[size_t(t - 1)];
     if (!connectible(qs) || !connectible(pt)) return Color3f(0.f);
     const Vec3f d = qs.p - pt.p;
@@ -109,8 +116,8 @@ Color3f connect(BDPTContext& ctx, const std::vector<PathVertex>& light, const st
         scattering(pt, w, TransportMode::Radiance) * scattering(qs, -w, TransportMode::Importance);
     if (is_black(f)) return Color3f(0.f);
     const Medium* medium = medium_toward(pt, w);
-    const Color3f tr = segment_transmittance(
-        ctx.scene, connection_ray(pt, qs.p, qs.type == VertexType::Surface), medium, ctx.sampler, ctx.rays);
+    const Color3f tr = connection_transmittance(ctx, connection_ray(pt, qs.p, qs.type == VertexType::Surface),
+                                                medium, record);
     if (is_black(tr)) return Color3f(0.f);
     Strategy st{s, t, &light, &camera, nullptr, nullptr, light[0].emitter};
     std::tie(st.ff_to_light, st.ff_to_camera) = connection_free_flight(ctx, pt, qs, medium);
@@ -171,12 +178,14 @@ Color3f connect_subpaths(BDPTContext& ctx, const std::vector<PathVertex>& camera
             if (settings.strategy_s >= 0 && (s != settings.strategy_s || t != settings.strategy_t)) continue;
             if (t == 1) {
                 if (ctx.sensor_connects) light_tracing(ctx, light, s, splats);
-            } else if (s == 0)
-                L += emission_hit(ctx, camera, t);
-            else if (s == 1)
-                L += next_event(ctx, camera, t);
-            else
-                L += connect(ctx, light, camera, s, t);
+                continue;
+            }
+            StrategyRecord* record = ctx.record ? &ctx.record->next(s, t) : nullptr;
+            const Color3f c = s == 0   ? emission_hit(ctx, camera, t)
+                              : s == 1 ? next_event(ctx, camera, t, record)
+                                       : connect(ctx, light, camera, s, t, record);
+            if (record) record->value = c;
+            L += c;
         }
     return L;
 }

@@ -2,6 +2,7 @@
 
 #include "core/warp.h"
 #include "render/adjoint_shading.h"
+#include "render/bdpt_record.h"
 #include "render/light_medium.h"
 #include "render/medium_sampling.h"
 #include "render/volume_visibility.h"
@@ -50,6 +51,8 @@ bool crosses(const SurfaceInteraction3f& hit) {
 // density from an infinite light), in `medium`, with throughput beta (pbrt-v3's RandomWalk with media).
 void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, float pdf_dir,
                  TransportMode mode, std::vector<PathVertex>& path, size_t max_vertices) {
+    std::vector<LegChain>* chains =
+        ctx.record ? (mode == TransportMode::Radiance ? &ctx.record->camera : &ctx.record->light) : nullptr;
     const BDPTContext& c = ctx;
     const BSDFContext bsdf_ctx{mode};
     thread_local std::vector<Piece> pieces;
@@ -61,12 +64,22 @@ void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, 
         SurfaceInteraction3f hit;
         bool scattered = false;
         Vec3f scatter_p;
+        LegChain* chain = nullptr;
+        if (chains) {
+            if (chains->size() <= path.size()) chains->resize(path.size() + 1);
+            chain = &(*chains)[path.size()];
+            chain->clear();
+        }
+        float travelled = 0.f;
         for (int crossing = 0;; ++crossing) {
             ++ctx.rays.rays;
             hit = c.scene.intersect(ray);
             const float tmax = hit.is_valid() ? hit.t : Infinity;
+            LegPiece* piece = chain ? &chain->add(medium, travelled) : nullptr;
+            if (piece) piece->bound = hit;
             if (medium) {
-                const FreeFlightSample ff = sample_free_flight(*medium, ray.o, ray.d, tmax, ctx.sampler);
+                const FreeFlightSample ff = sample_free_flight(*medium, ray.o, ray.d, tmax, ctx.sampler,
+                                                               piece ? &piece->record : nullptr);
                 beta *= ff.weight;
                 if (ff.event == FreeFlightSample::Event::Absorbed || is_black(beta)) return;
                 if (ff.event == FreeFlightSample::Event::Scattered) {
@@ -79,6 +92,7 @@ void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, 
             pieces.push_back({medium, ray.o, ray.d, tmax});
             if (!hit.is_valid() || !crosses(hit) || crossing >= 256) break;
             medium = target_medium(*hit.shape, hit.n, ray.d, medium);
+            travelled += hit.t;
             ray = hit.spawn_ray(ray.d);
         }
         const size_t prev_index = path.size() - 1;

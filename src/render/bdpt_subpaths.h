@@ -12,6 +12,8 @@ namespace penumbra {
 
 enum class MISHeuristic { Power, Balance };
 
+struct BDPTRecord; // render/bdpt_record.h
+
 struct BDPTSettings {
     int max_depth = -1; // longest path in segments (-1: infinite)
     int rr_depth = 5;
@@ -29,6 +31,7 @@ struct BDPTContext {
     bool has_media;        // the sensor, a shape or an emitter declares a medium (scene_has_media)
     bool sensor_connects;  // scene points can be connected to the sensor (not a radiance/irradiance meter)
     BoundingSphere bounds; // the disk infinite lights emit from has this radius
+    BDPTRecord* record = nullptr; // the differentiable estimator's record of the sample (null: rendering)
 };
 
 // Camera subpath z_0 (on the lens), z_1, ... along the primary `ray` (lens sample `u_aperture`).

@@ -48,7 +48,8 @@ FreeFlightSample sample_homogeneous(const Medium& medium, const Vec3f& o, const 
 // probabilities mean(sigma_a)/m, mean(sigma_s)/m, mean(sigma_n)/m, sigma_n = m - sigma_t, and the weight is
 // multiplied by sigma_event / (m P_event) per channel.
 FreeFlightSample sample_free_flight(const Medium& medium, const Vec3f& o, const Vec3f& d, float tmax,
-                                    Sampler& sampler) {
+                                    Sampler& sampler, FlightRecord* record) {
+    if (record) record->reset(tmax);
     if (medium.is_homogeneous()) return sample_homogeneous(medium, o, d, tmax, sampler);
     FreeFlightSample s;
     Color3f weight(1.f);
@@ -72,10 +73,12 @@ FreeFlightSample sample_free_flight(const Medium& medium, const Vec3f& o, const 
             s.t = t;
             s.p = p;
             s.weight = weight * sigma_s * (total / (m * ps));
+            if (record) record->length = t, record->real_majorant = m, record->real_probability = ps / total;
             done = true;
             return false;
         }
         weight *= sigma_n * (total / (m * pn));
+        if (record) record->collisions.push_back({t, m, pn / total});
         return true;
     });
     if (!done) {

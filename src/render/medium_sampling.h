@@ -48,8 +48,10 @@ void for_each_tentative_collision(const Medium& medium, const Vec3f& o, const Ve
 }
 
 // Samples where a ray (origin o, unit direction d) travelling in `medium` first scatters within [0, tmax).
+// `record` (optional) keeps the events of a heterogeneous medium (render/flight_record.h; a homogeneous
+// medium's weight has a closed form).
 FreeFlightSample sample_free_flight(const Medium& medium, const Vec3f& o, const Vec3f& d, float tmax,
-                                    Sampler& sampler);
+                                    Sampler& sampler, FlightRecord* record = nullptr);
 
 // An unbiased estimate of the per-channel transmittance exp(-∫_0^tmax sigma_t) along o + t d (exact for
 // homogeneous media; ratio tracking otherwise).
