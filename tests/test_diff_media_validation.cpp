@@ -8,7 +8,8 @@
 // errors (tests/diff_check.h: z of the image mean, relerr and relerr4 against their noise expectations, 4σ
 // outliers of 2 × 2 blocks). Where the parameter moves geometry or a light, the interior term alone (the
 // first term of the same run) must fail the same check: the boundary terms carry visible signal. `penumbra
-// ad-suite --manifest scenes/validation/media_suite.json --cache scenes/validation/media_fd` reports the same.
+// ad-suite --manifest scenes/validation/media_suite.json --cache scenes/validation/media_fd` reports the
+// same.
 #include "diff/ad_suite.h"
 #include "diff/method.h"
 #include "diff/psdr.h"
