@@ -1,8 +1,10 @@
 // `penumbra variance-study | sampling-demo`: the equal-time benchmarks of the path sampling methods (paper 002
-// §5.2 and §5.3; src/diff/variance_study.h, src/optim/sampling_race.h).
+// §5.2 and §5.3; src/diff/variance_study.h, src/optim/sampling_race.h); `penumbra equal-time`: variance × time of
+// derivative methods (paper 001 §7: psdr against a DTRT-like baseline; src/diff/equal_time.h).
 #include "cli.h"
 
 #include "core/error.h"
+#include "diff/equal_time.h"
 #include "diff/parameters.h"
 #include "diff/variance_study.h"
 #include "optim/sampling_race.h"
@@ -124,11 +126,63 @@ void add_sampling_demo(CLI::App& app) {
     });
 }
 
+void add_equal_time(CLI::App& app) {
+    struct Options {
+        std::string scene, reference, reference_stderr, output;
+        std::vector<std::string> params, defines, methods{"psdr", "psdr --no-volume-boundary"};
+        EqualTimeOptions study;
+        bool quiet = false;
+    };
+    auto opt = std::make_shared<Options>();
+    auto* cmd = app.add_subcommand("equal-time",
+                                   "variance x time of derivative methods (default: psdr against the DTRT-like "
+                                   "baseline psdr --no-volume-boundary, paper 001 §7)");
+    cmd->add_option("scene", opt->scene, "scene file (Mitsuba 3 XML)")->required();
+    cmd->add_option("--param", opt->params, "parameter to differentiate: NAME[=direction] (repeatable)")->required();
+    cmd->add_option("-D", opt->defines, "override a <default> value: name=value (e.g. -D res=64)");
+    cmd->add_option("--method", opt->methods,
+                    "a method with its options, quoted: \"psdr\", \"psdr --no-volume-boundary\", \"interior\" "
+                    "(repeatable; the first is the reference of the ratios)");
+    cmd->add_option("--spp", opt->study.spp, "samples per pixel per batch, every method (default 64)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--batches", opt->study.batches, "independent batches (default 16)")->check(CLI::Range(2, 100000));
+    cmd->add_option("--reference", opt->reference, "finite-difference reference (.exr) for the bias columns");
+    cmd->add_option("--reference-stderr", opt->reference_stderr, "its standard-error image (.exr)");
+    cmd->add_option("--seed", opt->study.seed, "random seed");
+    cmd->add_option("--threads", opt->study.threads, "worker threads (default: all)")->check(CLI::NonNegativeNumber);
+    cmd->add_option("-o,--output", opt->output, "write the table (.md)");
+    cmd->add_flag("-q,--quiet", opt->quiet, "no progress output");
+    cmd->callback([opt] {
+        if (!opt->output.empty() && lower_extension(opt->output) != ".md")
+            throw Error("equal-time: output '" + opt->output + "' must end in .md");
+        std::vector<MethodSpec> methods;
+        for (const std::string& m : opt->methods) methods.push_back(parse_method_spec(m));
+        auto scene = load_scene(opt->scene, parse_defines(opt->defines));
+        Parameters params(*scene);
+        std::vector<std::pair<std::string, std::vector<float>>> selection;
+        for (const std::string& p : opt->params) selection.push_back(parse_param_selection(p));
+        params.enable(selection);
+        const Image reference = opt->reference.empty() ? Image() : read_image(opt->reference, false);
+        const Image reference_stderr = opt->reference_stderr.empty() ? Image() : read_image(opt->reference_stderr, false);
+        if (!opt->quiet) opt->study.progress = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
+        const std::vector<EqualTimeRow> rows =
+            equal_time_study(*scene, params, methods, opt->study, reference, reference_stderr);
+        const std::string table = equal_time_markdown(rows, !reference.pixels.empty());
+        std::printf("%s", table.c_str());
+        if (!opt->output.empty()) {
+            std::ofstream out(opt->output);
+            out << table;
+            if (!out) throw Error("cannot write '" + opt->output + "'");
+        }
+    });
+}
+
 } // namespace
 
 void add_study_commands(CLI::App& app) {
     add_variance_study(app);
     add_sampling_demo(app);
+    add_equal_time(app);
 }
 
 } // namespace penumbra::cli

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -35,6 +36,7 @@ struct SuiteOptions {
     int threads = 0;
     std::string output;
     bool quiet = false;
+    bool fd_only = false; // compute and cache the references, no derivatives
 };
 
 struct Row {
@@ -47,14 +49,6 @@ struct Row {
     bool fd_cached = false;
 };
 
-std::string read_text(const std::string& path) {
-    std::ifstream file(path, std::ios::binary);
-    if (!file) throw Error("cannot read '" + path + "'");
-    std::ostringstream s;
-    s << file.rdbuf();
-    return s.str();
-}
-
 void write_text(const std::string& path, const std::string& text) {
     const std::string tmp = path + ".tmp";
     {
@@ -65,38 +59,17 @@ void write_text(const std::string& path, const std::string& text) {
     fs::rename(tmp, path);
 }
 
-// FNV-1a: a stable hash of the scene file, so that an edited scene invalidates its cached reference.
-std::string content_hash(const std::string& bytes) {
-    uint64_t h = 0xcbf29ce484222325ULL;
-    for (unsigned char c : bytes) h = (h ^ c) * 0x100000001b3ULL;
-    char hex[17];
-    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
-    return hex;
-}
-
 struct Reference {
     FiniteDifference fd;
     bool cached = false;
 };
 
-// The reference from the cache when everything it depends on matches, else computed and stored (images first,
-// the key last: an interrupted write leaves a key that does not match).
+// The reference from the cache when everything it depends on matches, else computed and stored.
 Reference cached_reference(const SuiteOptions& o, const AdSuiteScene& s, AdSuiteCase& c, int res, double h, int spp) {
-    const std::string base = (fs::path(o.cache) / s.name).string();
-    const std::string key_path = base + "_fd.json", value_path = base + "_fd.exr", se_path = base + "_fd_stderr.exr";
-    const nlohmann::json key = {{"scene_fnv1a", content_hash(read_text(s.file))}, {"res", res}, {"eps", h},
-                                {"spp", spp}, {"params", s.params}, {"defines", o.defines},
-                                {"batches", AdSuiteReferenceBatches}, {"seed", ReferenceSeed}};
-    if (fs::exists(key_path) && fs::exists(value_path) && fs::exists(se_path)) {
-        const nlohmann::json stored = nlohmann::json::parse(read_text(key_path), nullptr, false);
-        if (!stored.is_discarded() && stored.value("key", nlohmann::json()) == key)
-            return {{read_image(value_path, false), read_image(se_path, false), stored.value("seconds", 0.0)}, true};
-    }
+    if (auto fd = read_cached_reference(o.cache, s, res, h, spp, o.defines, ReferenceSeed)) return {*fd, true};
     ProgressBar bar(!o.quiet, s.name + " fd");
     Reference r{suite_reference(*c.scene, *c.params, h, spp, ReferenceSeed, o.threads, bar.callback()), false};
-    write_image(value_path, r.fd.derivative);
-    write_image(se_path, r.fd.stderr_img);
-    write_text(key_path, nlohmann::json{{"key", key}, {"seconds", r.fd.seconds}}.dump(1) + "\n");
+    write_cached_reference(o.cache, s, res, h, spp, o.defines, ReferenceSeed, r.fd);
     return r;
 }
 
@@ -117,6 +90,11 @@ Row run_scene(const SuiteOptions& o, const AdSuite& suite, const AdSuiteScene& s
     const Reference ref = cached_reference(o, s, c, res, settings.eps, fd_spp);
     row.fd_seconds = ref.fd.seconds;
     row.fd_cached = ref.cached;
+    if (o.fd_only) {
+        row.skipped = "reference only (" + std::to_string(int(std::lround(ref.fd.seconds))) + " s" +
+                      (ref.cached ? ", cached)" : ")");
+        return row;
+    }
 
     if (!o.quiet) std::fprintf(stderr, "%s: derivative (%d spp, psdr_budget split)\n", s.name.c_str(), s.spp);
     ProgressBar bar(!o.quiet, s.name + " derivative");
@@ -214,6 +192,9 @@ void add_suite_command(CLI::App& app) {
     cmd->add_option("-D", o->defines, "override a <default> value of every scene: name=value (e.g. filter=gaussian)");
     cmd->add_option("--threads", o->threads, "worker threads (default: all)")->check(CLI::NonNegativeNumber);
     cmd->add_option("-o,--output", o->output, "write the table as markdown (.md)");
+    cmd->add_flag("--fd-only", o->fd_only,
+                  "compute and cache the finite-difference references only (tests may read a committed cache, "
+                  "e.g. scenes/validation/media_fd)");
     cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
     cmd->callback([o] { cmd_suite(*o); });
 }

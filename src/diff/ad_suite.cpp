@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <sstream>
+#include <cstdio>
 
 namespace penumbra {
 
@@ -150,6 +152,64 @@ AdSuiteScore score(const Image& derivative, const Image& derivative_stderr, cons
     s.blocks = compare_images(block_average(derivative, 4), r4, block_average_stderr(derivative_stderr, 4), r4_se);
     s.reference_noise4 = compare_images(r4, r4, r4_se).noise_relerr;
     return s;
+}
+
+namespace {
+
+std::string read_text(const std::string& path) {
+    std::ifstream file(path, std::ios::binary);
+    if (!file) throw Error("cannot read '" + path + "'");
+    std::ostringstream s;
+    s << file.rdbuf();
+    return s.str();
+}
+
+// FNV-1a: a stable hash of the scene file, so that an edited scene invalidates its cached reference.
+std::string content_hash(const std::string& bytes) {
+    uint64_t h = 0xcbf29ce484222325ULL;
+    for (unsigned char c : bytes) h = (h ^ c) * 0x100000001b3ULL;
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+    return hex;
+}
+
+nlohmann::json reference_key(const AdSuiteScene& scene, int res, double h, int spp,
+                             const std::vector<std::string>& defines, uint64_t seed) {
+    return {{"scene_fnv1a", content_hash(read_text(scene.file))}, {"res", res}, {"eps", h}, {"spp", spp},
+            {"params", scene.params}, {"defines", defines}, {"batches", AdSuiteReferenceBatches}, {"seed", seed}};
+}
+
+std::string cache_base(const std::string& cache, const AdSuiteScene& scene) {
+    return (fs::path(cache) / scene.name).string();
+}
+
+} // namespace
+
+std::optional<FiniteDifference> read_cached_reference(const std::string& cache, const AdSuiteScene& scene, int res,
+                                                      double h, int spp, const std::vector<std::string>& defines,
+                                                      uint64_t seed) {
+    const std::string base = cache_base(cache, scene);
+    const std::string key_path = base + "_fd.json", value_path = base + "_fd.exr", se_path = base + "_fd_stderr.exr";
+    if (!fs::exists(key_path) || !fs::exists(value_path) || !fs::exists(se_path)) return std::nullopt;
+    const nlohmann::json stored = nlohmann::json::parse(read_text(key_path), nullptr, false);
+    if (stored.is_discarded() || stored.value("key", nlohmann::json()) != reference_key(scene, res, h, spp, defines, seed))
+        return std::nullopt;
+    return FiniteDifference{read_image(value_path, false), read_image(se_path, false), stored.value("seconds", 0.0)};
+}
+
+void write_cached_reference(const std::string& cache, const AdSuiteScene& scene, int res, double h, int spp,
+                            const std::vector<std::string>& defines, uint64_t seed, const FiniteDifference& fd) {
+    const std::string base = cache_base(cache, scene);
+    write_image(base + "_fd.exr", fd.derivative);
+    write_image(base + "_fd_stderr.exr", fd.stderr_img);
+    const std::string key_path = base + "_fd.json", tmp = key_path + ".tmp";
+    {
+        std::ofstream file(tmp);
+        file << nlohmann::json{{"key", reference_key(scene, res, h, spp, defines, seed)}, {"seconds", fd.seconds}}.dump(1)
+             << "\n";
+        if (!file) throw Error("cannot write '" + tmp + "'");
+    }
+    fs::rename(tmp, key_path);
 }
 
 } // namespace penumbra

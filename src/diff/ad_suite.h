@@ -10,6 +10,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -73,6 +74,17 @@ PsdrDerivative suite_derivative(const Scene& scene, const Parameters& params, in
 // batches.
 FiniteDifference suite_reference(Scene& scene, Parameters& params, double h, int spp, uint64_t seed, int threads,
                                  std::function<void(float)> progress = {});
+
+// The reference cache of `penumbra ad-suite --cache DIR`: <DIR>/<name>_fd.exr, _fd_stderr.exr and _fd.json, whose key
+// (the scene file's FNV-1a hash, res, step, spp, params, defines, batches, seed) must match for the images to be
+// used. A test may read references a study stored (scenes/validation/media_fd).
+// The cached reference, or an empty optional when it is absent or its key does not match.
+std::optional<FiniteDifference> read_cached_reference(const std::string& cache, const AdSuiteScene& scene, int res,
+                                                      double h, int spp, const std::vector<std::string>& defines,
+                                                      uint64_t seed);
+// Writes images first and the key last (an interrupted write leaves a key that does not match).
+void write_cached_reference(const std::string& cache, const AdSuiteScene& scene, int res, double h, int spp,
+                            const std::vector<std::string>& defines, uint64_t seed, const FiniteDifference& fd);
 
 struct AdSuiteScore {
     Comparison full;            // relerr and the z-score of the image mean

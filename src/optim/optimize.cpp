@@ -275,8 +275,11 @@ class CsvLog {
         if (!out_) throw Error("cannot write '" + path.string() + "'");
         out_ << "iteration,loss,parameter_error,translation_error,rotation_error,seconds";
         for (const InverseProblem::Entry& e : problem.entries())
-            for (int k = 0; k < e.size; ++k)
-                out_ << "," << e.name << (e.size > 1 ? "[" + std::to_string(k) + "]" : "");
+            for (int k = 0; k < e.size; ++k) {
+                // A deformation handle's name holds its center (blob.deform@0.3,0.9,0): quoted (RFC 4180).
+                const std::string column = e.name + (e.size > 1 ? "[" + std::to_string(k) + "]" : "");
+                out_ << "," << (column.find(',') == std::string::npos ? column : "\"" + column + "\"");
+            }
         out_ << "\n";
     }
     void write(const IterationRecord& r, const std::vector<double>& x) {

@@ -9,7 +9,9 @@
 //                              ("init" defaults to the scene's value, "bounds" to none). A pose is
 //                              "<shape>.translate" (3 values, world units) and/or "<shape>.rotate" (a
 //                              rotation vector in degrees about the shape's bounding-box center, no bounds),
-//                              both relative to the scene's pose (optim/problem.h)
+//                              both relative to the scene's pose (optim/problem.h); "<shape>.deform@cx,cy,cz"
+//                              a deformation handle at c (3 values, its displacement, world units; several
+//                              per shape, not with a pose; optim/deformation.h)
 //   target          object     {"image": path relative to the configuration}  or
 //                              {"values": {name → number | [values]}, "spp": int}: the same scene with these
 //                              values of optimized parameters (the others keep the scene's), rendered at

@@ -33,10 +33,15 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
     std::map<const Shape*, int> pose_of;
     std::vector<std::string> pose_names; // the shape's name, the prefix of its motions
     std::set<const Shape*> deformed;     // shapes whose vertex_positions are optimized
+    std::map<const Shape*, int> deformation_of;
+    std::vector<std::string> handle_names; // <shape>.deform@cx,cy,cz per Deform entry, in order
     int data_dimension = 0;
     for (const OptimizedParameter& op : parameters) {
         if (!names.insert(op.name).second) throw Error("parameter '" + op.name + "' is optimized twice");
-        const Parameter& p = params_->find(op.name);
+        const auto [base_name, center] = split_motion_center(op.name);
+        const Parameter& p = params_->find(base_name);
+        if (center && p.kind != Parameter::Kind::Deform)
+            throw Error("parameter '" + op.name + "': a center (@x,y,z) applies to deformation handles only");
         Entry e{op.name, Kind::Data, dimension_, p.size, 0, -1, op.learning_rate, op.lower, op.upper};
         if (p.kind == Parameter::Kind::Data) {
             e.param_offset = data_dimension;
@@ -48,8 +53,21 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
             if (p.sensor || p.emitter)
                 throw Error("parameter '" + op.name +
                             "': camera motions and light motions cannot be optimized, only shape poses");
-            if (p.kind == Parameter::Kind::Deform)
-                throw Error("parameter '" + op.name + "': deformations cannot be optimized, only shape poses");
+            if (p.kind == Parameter::Kind::Deform) {
+                e.kind = Kind::Deform;
+                e.size = 3;
+                auto [it, added] = deformation_of.try_emplace(p.shape, int(deformations_.size()));
+                if (added) deformations_.emplace_back(*p.shape);
+                ShapeDeformation& d = deformations_[size_t(it->second)];
+                e.deformation = it->second;
+                e.handle = d.add_handle(center ? *center : d.center());
+                const Vec3f c = d.handle_center(e.handle);
+                handle_names.push_back(base_name + "@" + std::to_string(c.x) + "," + std::to_string(c.y) + "," +
+                                       std::to_string(c.z));
+                dimension_ += e.size;
+                entries_.push_back(e);
+                continue;
+            }
             if (p.kind == Parameter::Kind::Scale)
                 throw Error("parameter '" + op.name +
                             "': scaling cannot be optimized; a pose is <shape>.translate and <shape>.rotate");
@@ -68,8 +86,10 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
         entries_.push_back(e);
     }
     for (const Shape* shape : deformed)
-        if (pose_of.count(shape))
-            throw Error("a shape's vertex_positions and its pose cannot be optimized together");
+        if (pose_of.count(shape) || deformation_of.count(shape))
+            throw Error("a shape's vertex_positions and its pose or deformation cannot be optimized together");
+    for (const auto& [shape, index] : deformation_of)
+        if (pose_of.count(shape)) throw Error("a shape's pose and its deformation cannot be optimized together");
 
     // Differentiation: the Data parameters, then for each posed shape six motions at θ = 0 (translate along
     // x, y, z; rotate about x, y, z), whether or not both halves of its pose are optimized: the rotation
@@ -81,8 +101,16 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
                 selection_.emplace_back(
                     shape + motion,
                     std::vector<float>{k == 0 ? 1.f : 0.f, k == 1 ? 1.f : 0.f, k == 2 ? 1.f : 0.f});
-    for (Entry& e : entries_)
-        if (e.kind != Kind::Data) e.param_offset = data_dimension + 6 * e.pose;
+    // Then three deform motions (along x, y, z) per deformation handle.
+    for (const std::string& handle : handle_names)
+        for (int k = 0; k < 3; ++k)
+            selection_.emplace_back(handle,
+                                    std::vector<float>{k == 0 ? 1.f : 0.f, k == 1 ? 1.f : 0.f, k == 2 ? 1.f : 0.f});
+    int handle = 0;
+    for (Entry& e : entries_) {
+        if (e.kind == Kind::Translate || e.kind == Kind::Rotate) e.param_offset = data_dimension + 6 * e.pose;
+        if (e.kind == Kind::Deform) e.param_offset = data_dimension + 6 * int(poses_.size()) + 3 * handle++;
+    }
     scene_values_ = values();
     apply();
 }
@@ -104,6 +132,8 @@ std::vector<double> InverseProblem::values() const {
                       x.begin() + e.offset);
         else if (e.kind == Kind::Translate)
             put(x, e.offset, poses_[size_t(e.pose)].translation());
+        else if (e.kind == Kind::Deform)
+            put(x, e.offset, deformations_[size_t(e.deformation)].displacement(e.handle));
         else
             put(x, e.offset, rotation_vector(poses_[size_t(e.pose)].rotation()) / Degree);
     }
@@ -122,6 +152,8 @@ void InverseProblem::set_values(const std::vector<double>& x) {
                       data_values_.begin() + e.param_offset);
         else if (e.kind == Kind::Translate)
             pose->set(vec3(x, e.offset), pose->rotation());
+        else if (e.kind == Kind::Deform)
+            deformations_[size_t(e.deformation)].set(e.handle, vec3(x, e.offset));
         else
             pose->set(pose->translation(), rotation_from_vector(vec3(x, e.offset) * Degree));
     }
@@ -166,7 +198,9 @@ void InverseProblem::apply() {
     params_->set_values(scene_, std::vector<float>(data_values_.begin(), data_values_.end()));
     for (const ShapePose& pose : poses_)
         pose.apply();
-    if (!poses_.empty()) scene_.build();
+    for (const ShapeDeformation& deformation : deformations_)
+        deformation.apply();
+    if (!poses_.empty() || !deformations_.empty()) scene_.build();
     params_->enable(
         selection_); // after the meshes moved: the motions' centers are the current bounding boxes'
 }
@@ -186,7 +220,7 @@ std::vector<double> InverseProblem::gradient(const Image& adjoint, DerivativeMet
             continue;
         }
         const Vec3d g_translate = vec3(g.values, e.param_offset);
-        if (e.kind == Kind::Translate) {
+        if (e.kind == Kind::Translate || e.kind == Kind::Deform) {
             put(out, e.offset, g_translate);
             continue;
         }
@@ -218,6 +252,8 @@ double InverseProblem::data_error(const std::vector<double>& truth) const {
 double InverseProblem::entry_error(size_t entry, const std::vector<double>& truth) const {
     const Entry& e = entries_.at(entry);
     if (e.kind == Kind::Data) return NAN;
+    if (e.kind == Kind::Deform)
+        return norm(deformations_[size_t(e.deformation)].displacement(e.handle) - vec3(truth, e.offset));
     const ShapePose& pose = poses_[size_t(e.pose)];
     if (e.kind == Kind::Translate) return norm(pose.translation() - vec3(truth, e.offset));
     return rotation_angle(pose.rotation(), rotation_from_vector(vec3(truth, e.offset) * Degree)) / Degree;
@@ -226,7 +262,8 @@ double InverseProblem::entry_error(size_t entry, const std::vector<double>& trut
 double InverseProblem::translation_error(const std::vector<double>& truth) const {
     double worst = NAN;
     for (size_t i = 0; i < entries_.size(); ++i)
-        if (entries_[i].kind == Kind::Translate) worst = std::fmax(worst, entry_error(i, truth));
+        if (entries_[i].kind == Kind::Translate || entries_[i].kind == Kind::Deform)
+            worst = std::fmax(worst, entry_error(i, truth));
     return worst;
 }
 

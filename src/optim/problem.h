@@ -2,7 +2,10 @@
 //   Data parameters      their values (materials, emitters, ...),
 //   <shape>.translate    t ∈ R³, world units, relative to the scene's pose,
 //   <shape>.rotate       a rotation vector in degrees (axis-angle: direction = world axis, norm = angle)
-//                        about the shape's bounding-box center in the scene (optim/pose.h).
+//                        about the shape's bounding-box center in the scene (optim/pose.h),
+//   <shape>.deform@c     the displacement θ ∈ R³ (world units) of a deformation handle at c (default: the
+//                        bounding-box center), x → x + θ exp(−‖x − c‖² / 2r²) (optim/deformation.h); a shape
+//                        may have several handles, not together with a pose.
 // Tangent vectors (gradients, Adam steps, finite-difference directions) have the same layout; for rotations
 // they are world-frame increments ω (degrees) applied on the left, R ← exp([ω]×) R.
 // Gradients come from a derivative method (diff/method.h); a pose needs one with boundary terms (psdr), since
@@ -10,6 +13,7 @@
 #pragma once
 #include "diff/method.h"
 #include "optim/adam.h"
+#include "optim/deformation.h"
 #include "optim/pose.h"
 
 #include <limits>
@@ -32,7 +36,7 @@ double relative_distance(const std::vector<double>& a, const std::vector<double>
 
 class InverseProblem {
   public:
-    enum class Kind { Data, Translate, Rotate };
+    enum class Kind { Data, Translate, Rotate, Deform };
     struct Entry {
         std::string name;
         Kind kind = Kind::Data;
@@ -40,6 +44,7 @@ class InverseProblem {
         int param_offset = 0;     // Data: its index in Parameters; poses: the first of 3 motion indices
         int pose = -1;            // Translate / Rotate: index into poses()
         double learning_rate = 0.01, lower = 0, upper = 0;
+        int deformation = -1, handle = -1; // Deform: index into the deformations and the handle in it
     };
 
     // Resolves the names against the scene. Throws Error for unknown names, camera motions, scaling, a
@@ -50,7 +55,7 @@ class InverseProblem {
 
     int dimension() const { return dimension_; }
     const std::vector<Entry>& entries() const { return entries_; }
-    bool geometric() const { return !poses_.empty(); }
+    bool geometric() const { return !poses_.empty() || !deformations_.empty(); }
     const std::vector<ShapePose>& poses() const { return poses_; }
     std::vector<AdamGroup> adam_groups() const;
 
@@ -85,6 +90,7 @@ class InverseProblem {
     std::unique_ptr<Parameters> params_;
     std::vector<Entry> entries_;
     std::vector<ShapePose> poses_;
+    std::vector<ShapeDeformation> deformations_;
     std::vector<std::pair<std::string, std::vector<float>>> data_selection_, selection_;
     std::vector<double> data_values_, scene_values_;
     int dimension_ = 0;
