@@ -47,14 +47,16 @@ bool image_space_first_vertex(const Scene& scene, const Parameters& params, Firs
         return true;
     }
     if (choice == FirstVertex::ImageSpace && camera_moves)
-        throw Error("the image-space first vertex needs a static camera: the sensor moves (use --first-vertex material)");
+        throw Error("the image-space first vertex needs a static camera: the sensor moves (use "
+                    "--first-vertex material)");
     if (choice != FirstVertex::Auto) return choice == FirstVertex::ImageSpace;
     if (camera_moves) return false;
     for (const auto& shape : scene.shapes)
-        if (params.moves(*shape) && has_texture(*shape, [](const Texture& t) { return !t.is_continuous(); })) return false;
-    // A point or spot light moving in a medium carries the medium near it (diff/volume_motion.h); the camera's
-    // first medium vertex follows that motion only in material form (in image space the single scattering next
-    // to the light has the heavy-tailed 1/ℓ³ derivative of I/ℓ²).
+        if (params.moves(*shape) && has_texture(*shape, [](const Texture& t) { return !t.is_continuous(); }))
+            return false;
+    // A point or spot light moving in a medium carries the medium near it (diff/volume_motion.h); the
+    // camera's first medium vertex follows that motion only in material form (in image space the single
+    // scattering next to the light has the heavy-tailed 1/ℓ³ derivative of I/ℓ²).
     if (scene_has_media(scene))
         for (const auto& e : scene.emitters)
             if (e->is_delta() && !e->is_infinite() && !params.emitter_motions(e.get()).empty()) return false;
