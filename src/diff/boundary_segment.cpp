@@ -3,6 +3,7 @@
 #include "core/warp.h"
 #include "diff/interior_media.h"
 #include "diff/media_walk.h"
+#include "render/volume_visibility.h"
 #include "render/light_medium.h"
 #include "scene/shape_interaction.h"
 
@@ -233,7 +234,7 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext&
             source.infinite ? Ray(origin(x_b.p), dir, norm(x_b.p - origin(x_b.p))) : at_source.spawn_ray_to(x_b.p);
         to_edge.tmax *= 0.999f;
         medium = source.medium;
-        tr = walk_transmittance(scene, to_edge, medium, sampler, rays);
+        tr = segment_transmittance(scene, to_edge, medium, sampler, rays, &medium);
         if (is_black(tr)) return out;
     }
     const FlightEnd end =

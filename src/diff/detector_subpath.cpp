@@ -1,6 +1,7 @@
 #include "diff/detector_subpath.h"
 
 #include "diff/media_walk.h"
+#include "render/volume_visibility.h"
 #include "render/adjoint_shading.h"
 
 namespace penumbra {
@@ -28,8 +29,7 @@ Ray ray_to_camera(const Scene& scene, const Vec3f& p, const Vec3f& n) {
 
 // Whether no opaque surface hides the point p (normal n) from the camera (media and null boundaries aside).
 bool camera_sees(const Scene& scene, const Vec3f& p, const Vec3f& n, Sampler& sampler, RayCounter& rays) {
-    const Medium* vacuum = nullptr;
-    return !is_black(walk_transmittance(scene, ray_to_camera(scene, p, n), vacuum, sampler, rays));
+    return !is_black(segment_transmittance(scene, ray_to_camera(scene, p, n), nullptr, sampler, rays));
 }
 
 // The camera's importance at vertex v in film measure, times the adjoint BSDF (or the phase function) toward
@@ -57,8 +57,8 @@ bool connect_to_camera(const Scene& scene, const DetectorVertex& v, CameraConnec
         medium = target_medium(*v.si.shape, v.si.n, to_cam, medium);
     }
     if (is_black(f)) return false;
-    const Color3f tr = walk_transmittance(scene, ray_to_camera(scene, p, v.in_medium() ? Vec3f(0.f) : v.si.n), medium,
-                                          sampler, rays);
+    const Color3f tr = segment_transmittance(scene, ray_to_camera(scene, p, v.in_medium() ? Vec3f(0.f) : v.si.n),
+                                             medium, sampler, rays);
     out.weight = f * tr * (jacobian / cos_cam);
     return !is_black(out.weight);
 }

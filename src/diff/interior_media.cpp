@@ -8,7 +8,6 @@ Color3<Var> volumetric_camera_path(const Scene& scene, const MaterialForm& form,
                                    const Ray& ray, const Color3f& ray_weight, const CameraFactor& camera,
                                    float escaped_weight, const PathSettings& settings, RayCounter& rays) {
     thread_local LegChain chain;
-    const Sensor& sensor = *scene.sensor;
     const bool image = form.image_space_first_vertex();
     const Vec3f o0 = ray.o;
     const Vec3<Var> o = image ? Vec3<Var>(o0) : form.camera_position(o0);

@@ -14,25 +14,6 @@ bool is_null(const SurfaceInteraction3f& si) { return si.bsdf() && si.bsdf()->fl
 
 } // namespace
 
-Color3f walk_transmittance(const Scene& scene, Ray ray, const Medium*& medium, Sampler& sampler,
-                           RayCounter& rays) {
-    Color3f tr(1.f);
-    for (int crossing = 0; crossing < MaxCrossings; ++crossing) {
-        ++rays.rays;
-        const SurfaceInteraction3f si = scene.intersect(ray);
-        if (medium) {
-            tr *= transmittance(*medium, ray.o, ray.d, si.is_valid() ? si.t : ray.tmax, sampler);
-            if (is_black(tr)) return tr;
-        }
-        if (!si.is_valid()) return tr;
-        if (!is_null(si)) return Color3f(0.f);
-        medium = target_medium(*si.shape, si.n, ray.d, medium);
-        ray = ray_beyond(ray, si);
-        if (!(ray.tmax > 0.f)) return tr;
-    }
-    return Color3f(0.f);
-}
-
 FlightEnd sample_interaction(const Scene& scene, Ray ray, const Medium* medium, bool volume_vertices,
                              Sampler& sampler, RayCounter& rays) {
     FlightEnd out;

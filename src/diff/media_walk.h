@@ -1,6 +1,6 @@
 // Straight walks of the boundary terms through participating media and index-matched (`null`) boundaries
-// (paper 001 §5.2, Algorithm 1): the transmittance of a boundary path's segment, and sampleInteraction — the
-// free flight that ends a boundary segment at a medium vertex or at the first surface that scatters.
+// (paper 001 §5.2, Algorithm 1): sampleInteraction — the free flight that ends a boundary segment at a medium
+// vertex or at the first surface that scatters (segments' transmittance: render/volume_visibility.h).
 // Surfaces whose BSDF is a pure `null` are crossed (the medium changes by target_medium); any other surface
 // blocks a transmittance walk and ends a free flight. Weights are detached floats.
 #pragma once
@@ -8,11 +8,6 @@
 #include "scene/scene.h"
 
 namespace penumbra {
-
-// Transmittance along `ray` over [0, ray.tmax) starting in `*medium`, which is updated to the medium at the
-// segment's end. Zero when a surface other than a null one lies on the segment.
-Color3f walk_transmittance(const Scene& scene, Ray ray, const Medium*& medium, Sampler& sampler,
-                           RayCounter& rays);
 
 // The end of a free flight along `ray` (unbounded) starting in `medium`: a medium vertex (scattered), a
 // surface (passed), the ray escaping the scene (passed), or nothing (absorbed). With `volume_vertices` false,

@@ -302,7 +302,7 @@ Color3f seen_radiance(const Scene& scene, const Ray& ray, const SurfaceInteracti
     const Medium* medium = sensor_medium(scene);
     Ray to_hit = ray;
     to_hit.tmax = hit.t * 0.999f;
-    const Color3f tr = walk_transmittance(scene, to_hit, medium, sampler, rays);
+    const Color3f tr = segment_transmittance(scene, to_hit, medium, sampler, rays, &medium);
     if (is_black(tr)) return tr;
     return tr * vertex_radiance(scene, {hit, ray.d * -1.f, medium}, settings.max_depth, !settings.hide_emitters,
                                 settings, sampler, rays);
@@ -316,7 +316,7 @@ ArrivingRadiance far_side(const Scene& scene, const EdgeCrossing& c, const PathS
     const Ray& ray = c.ray[1];
     const float depth = norm(c.x_edge - ray.o);
     const Medium* medium = sensor_medium(scene);
-    const Color3f tr = walk_transmittance(scene, Ray(ray.o, ray.d, depth), medium, sampler, rays);
+    const Color3f tr = segment_transmittance(scene, Ray(ray.o, ray.d, depth), medium, sampler, rays, &medium);
     if (is_black(tr)) return {};
     ArrivingRadiance out = arriving_radiance(scene, Ray(ray(depth), ray.d), medium, settings, sampler, rays);
     out.radiance *= tr;

@@ -42,8 +42,8 @@ Ray connection_ray(const PathVertex& v, const Vec3f& target, bool target_on_surf
 
 // The transmittance of a connection (recorded piece by piece when the sample is recorded).
 Color3f connection_transmittance(BDPTContext& ctx, const Ray& ray, const Medium* medium, StrategyRecord* record) {
-    if (!record) return segment_transmittance(ctx.scene, ray, medium, ctx.sampler, ctx.rays);
-    return sample_shadow_chain(ctx.scene, ray, medium, ctx.sampler, record->connection, ctx.rays);
+    return segment_transmittance(ctx.scene, ray, medium, ctx.sampler, ctx.rays, nullptr,
+                                 record ? &record->connection : nullptr);
 }
 
 Interaction3f reference(const PathVertex& v) {

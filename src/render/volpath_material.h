@@ -29,31 +29,6 @@
 
 namespace penumbra {
 
-// One straight piece of a chain of legs through null surfaces: travelled in `medium` (null: vacuum) and
-// ending at `bound`, the surface its ray met (invalid: none), which is crossed unless it is the chain's end.
-struct LegPiece {
-    const Medium* medium = nullptr;
-    SurfaceInteraction3f bound;
-    float start = 0.f; // reference distance of the piece's start from the chain's start
-    FlightRecord record;
-};
-
-// The pieces of one chain (kept across steps to reuse their storage).
-struct LegChain {
-    std::vector<LegPiece> pieces;
-    int count = 0;
-
-    LegPiece& add(const Medium* medium, float start) {
-        if (count == int(pieces.size())) pieces.emplace_back();
-        LegPiece& p = pieces[size_t(count++)];
-        p.medium = medium;
-        p.bound = SurfaceInteraction3f();
-        p.start = start;
-        return p;
-    }
-    void clear() { count = 0; }
-};
-
 // How a chain ended.
 struct ChainEnd {
     enum class Kind { Surface, Medium, Escaped, Absorbed } kind = Kind::Absorbed;
@@ -112,34 +87,6 @@ inline ChainEnd sample_chain(const Scene& scene, Ray ray, const Medium* medium, 
         ++rays.rays;
     }
     return end;
-}
-
-// The transmittance of a shadow connection from `ray.o` over [0, ray.tmax) through null surfaces, recording
-// its pieces; zero if blocked.
-inline Color3f sample_shadow_chain(const Scene& scene, Ray ray, const Medium* medium, Sampler& sampler,
-                                   LegChain& chain, RayCounter& rays) {
-    chain.clear();
-    Color3f tr(1.f);
-    float travelled = 0.f;
-    for (int crossing = 0; crossing < 256; ++crossing) {
-        ++rays.rays;
-        const SurfaceInteraction3f si = scene.intersect(ray);
-        LegPiece& piece = chain.add(medium, travelled);
-        piece.bound = si;
-        if (medium) {
-            tr *=
-                transmittance(*medium, ray.o, ray.d, si.is_valid() ? si.t : ray.tmax, sampler, &piece.record);
-            if (is_black(tr)) return tr;
-        }
-        if (!si.is_valid()) return tr;
-        const BSDF* bsdf = si.bsdf();
-        if (!bsdf || bsdf->flags() != BSDFNull) return Color3f(0.f);
-        medium = target_medium(*si.shape, si.n, ray.d, medium);
-        travelled += si.t;
-        ray = ray_beyond(ray, si);
-        if (!(ray.tmax > 0.f)) return tr;
-    }
-    return Color3f(0.f);
 }
 
 // Where the line through a and b meets the plane of the moving triangle of `hit` (a crossing of a null
@@ -245,8 +192,7 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
                 const Medium* shadow_medium =
                     v.surface ? target_medium(*v.hit.shape, v.hit.n, ds.d, v.medium) : v.medium;
                 const Color3f tr = is_black(f0) ? Color3f(0.f)
-                                                : sample_shadow_chain(scene, shadow_ray, shadow_medium,
-                                                                      sampler, shadow, rays);
+                                                : segment_transmittance(scene, shadow_ray, shadow_medium, sampler, rays, nullptr, &shadow);
                 if (!is_black(tr)) {
                     const float w = ds.delta ? 1.f : mis_power(ds.pdf, pdf);
                     if constexpr (reference) {
