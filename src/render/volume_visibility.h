@@ -42,7 +42,8 @@ struct LegChain {
 // at the segment's end; `pieces` (optional) the segment's pieces between crossings with their ratio-tracking
 // records, for re-evaluation on a moving segment (render/volpath_material.h chain_weight).
 Color3f segment_transmittance(const Scene& scene, Ray ray, const Medium* medium, Sampler& sampler,
-                              RayCounter& rays, const Medium** end_medium = nullptr, LegChain* pieces = nullptr);
+                              RayCounter& rays, const Medium** end_medium = nullptr,
+                              LegChain* pieces = nullptr);
 
 // The rest of `ray` beyond its surface hit `si`: offset off the surface, tmax shortened by the distance
 // covered (not positive when nothing is left).
