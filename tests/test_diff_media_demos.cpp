@@ -18,11 +18,12 @@ namespace {
 
 const std::string demos = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/media_demos/";
 
-OptimizeResult run_demo(const std::string& config_file, int res, int iterations, const std::string& out) {
+OptimizeResult run_demo(const std::string& config_file, int res, int iterations, int target_spp,
+                        const std::string& out) {
     OptimizeConfig config = load_optimize_config(demos + config_file);
     config.defines["res"] = std::to_string(res);
     config.iterations = iterations;
-    config.target_spp = 256;
+    config.target_spp = target_spp;
     config.snapshot_every = 0;
     config.output = (fs::temp_directory_path() / out).string();
     fs::remove_all(config.output);
@@ -33,24 +34,27 @@ OptimizeResult run_demo(const std::string& config_file, int res, int iterations,
 
 } // namespace
 
-// (i) The position of a glass sphere in fog from its volumetric caustics (spheres.json), 25 iterations at
-// 16²: the translation error must fall (measured 0.144 -> 0.128 units; the full demo at 32² in
-// docs/differentiable-media.md).
+// (i) The position of a glass sphere in fog from its volumetric caustics (spheres.json: its horizontal
+// translation, 2 variables), 25 iterations at 16² against a 2048-spp target: the translation error must at
+// least halve (measured 0.144 -> 0.032, 0.044, 0.037, 0.062 units with the config's seed 0, 1, 2, 3; the full
+// demo at 32² reaches 0.009, docs/differentiable-media.md).
 TEST(MediaDemo, RecoversTheSpherePositionFromVolumetricCaustics) {
-    const OptimizeResult r = run_demo("spheres.json", 16, 25, "penumbra_test_media_spheres");
+    const OptimizeResult r = run_demo("spheres.json", 16, 25, 2048, "penumbra_test_media_spheres");
     ASSERT_FALSE(r.history.empty());
     const IterationRecord& first = r.history.front();
     std::printf("  translation error %.4g -> %.4g, loss %.4g -> %.4g, %.1f s\n", first.translation_error,
                 r.final_translation_error, first.loss, r.history.back().loss, r.seconds);
     EXPECT_EQ(r.method, "psdr");
-    EXPECT_LT(r.final_translation_error, 0.95 * first.translation_error);
+    EXPECT_LT(r.final_translation_error, 0.5 * first.translation_error);
 }
 
-// (ii) A translucent object's surface roughness and medium density jointly with two deformation handles
-// (translucent.json), 25 iterations at 16²: the relative error of roughness and density must halve (measured
-// 0.507 -> 0.209); the handles' displacement error is printed (at 16² it is not yet resolved).
+// (ii) A translucent object's roughness and medium density jointly with two deformation handles
+// (translucent.json), 25 iterations at 16² against a 256-spp target: the relative error of roughness and density
+// must halve (measured 0.507 -> 0.049, 0.143, 0.136, 0.195 with the config's seed 0, 1, 2, 3); the handles'
+// displacement error is printed (at 16² they are not resolved; the full demo at 48² brings them from 0.117 and
+// 0.080 units to 0.019 and 0.025, docs/differentiable-media.md).
 TEST(MediaDemo, RecoversRoughnessAndDensityOfATranslucentObject) {
-    const OptimizeResult r = run_demo("translucent.json", 16, 25, "penumbra_test_media_translucent");
+    const OptimizeResult r = run_demo("translucent.json", 16, 25, 256, "penumbra_test_media_translucent");
     ASSERT_FALSE(r.history.empty());
     const IterationRecord& first = r.history.front();
     std::printf(

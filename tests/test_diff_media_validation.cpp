@@ -63,18 +63,7 @@ std::vector<std::string> scene_names() {
 
 class MediaScene : public testing::TestWithParam<std::string> {};
 
-// Cases whose check does not pass yet (issue 13 is open on them; reported as skipped, never as passed):
-//  bumpy_sphere: the interior term's variance at the test budget hides what the boundary terms add (psdr agrees
-//                with FD, but interior-only cannot be told apart);
-//  smoke_albedo: z ≈ −4 against FD over seeds: a suspected 1–2% bias of heterogeneous albedo derivatives.
-const char* open_problem(const std::string& name) {
-    if (name == "bumpy_sphere") return "interior-only not distinguishable from psdr at the test budget";
-    if (name == "smoke_albedo") return "suspected 1-2% bias of heterogeneous albedo derivatives (z ~ -4)";
-    return nullptr;
-}
-
 TEST_P(MediaScene, MatchesFiniteDifferences) {
-    if (const char* why = open_problem(GetParam())) GTEST_SKIP() << "open: " << why;
     const AdSuite suite = load_ad_suite(manifest);
     const AdSuiteScene* found = nullptr;
     for (const AdSuiteScene& s : suite.scenes)
@@ -154,6 +143,11 @@ TEST(MediaValidation, ReverseModeMatchesForwardModeHeterogeneousShadows) {
 TEST(MediaValidation, ReverseModeMatchesForwardModeMediumParameters) {
     expect_reverse_matches_forward("smoke_scale", 16, 4, 0);
     expect_reverse_matches_forward("fog_g", 16, 4, 0);
+}
+
+// The bidirectional interior (bdpt scene) and boundary segments ending at a moving point light.
+TEST(MediaValidation, ReverseModeMatchesForwardModeLightTranslation) {
+    expect_reverse_matches_forward("bumpy_sphere", 8, 4, 4);
 }
 
 TEST(MediaValidation, ReverseModeMatchesForwardModeTranslucent) {

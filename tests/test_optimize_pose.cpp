@@ -218,8 +218,30 @@ TEST(PoseConfig, ErrorsAreExplicit) {
                   .find("vertex_positions and its pose"),
               std::string::npos);
     EXPECT_NE(optimize_error(R"({"prism.translat": {"lr": 0.01}})").find("did you mean"), std::string::npos);
+    EXPECT_NE(optimize_error(R"({"prism.translate": {"lr": 0.01, "free": [true, false]}})")
+                  .find("'free' has 2 entries for 3 components"),
+              std::string::npos);
+    EXPECT_NE(optimize_error(R"({"prism.translate": {"lr": 0.01, "free": [1, 0, 1]}})")
+                  .find("'parameters.prism.translate.free': expected an array of booleans"),
+              std::string::npos);
     EXPECT_EQ(optimize_error(ok), "");
     fs::remove_all(fs::temp_directory_path() / "penumbra_test_pose_errors");
+}
+
+// "free": components that are not free keep their initial value through the Adam steps; the free ones move.
+TEST(PoseConfig, FixedComponentsKeepTheirValue) {
+    auto scene = load_scene(pose_dir + "scene.xml", {{"res", "8"}});
+    OptimizedParameter translate{"prism.translate", {}, 0.01};
+    translate.free = {true, false, true};
+    InverseProblem problem(*scene, {translate});
+    problem.set_values({0.1, 0.2, -0.1});
+    Adam adam(problem.adam_groups(), problem.dimension());
+    for (int i = 0; i < 5; ++i)
+        problem.adam_step(adam, {1.0, -2.0, 0.5}, 1.0);
+    const std::vector<double> after = problem.values();
+    EXPECT_NEAR(after[0], 0.1 - 0.05, 1e-6); // Adam with a constant gradient: steps of lr (ε 1e-8 aside)
+    EXPECT_EQ(after[1], 0.2);
+    EXPECT_NEAR(after[2], -0.1 - 0.05, 1e-6);
 }
 
 // The demo at reduced settings: 32x32 instead of 64x64, 120 iterations instead of 150 (the rate decay to 0.1x

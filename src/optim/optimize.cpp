@@ -120,6 +120,13 @@ OptimizedParameter parse_parameter(const std::string& name, const json& j, const
         }
         if (!(p.lower <= p.upper)) throw Error(source + ": key '" + o.path("bounds") + "': lower > upper");
     }
+    if (const json* f = o.find("free", false)) {
+        if (!f->is_array() || f->empty()) o.fail("free", "a non-empty array of booleans", *f);
+        for (const json& e : *f) {
+            if (!e.is_boolean()) o.fail("free", "an array of booleans", *f);
+            p.free.push_back(e.get<bool>());
+        }
+    }
     o.finish();
     return p;
 }

@@ -42,7 +42,7 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
         const Parameter& p = params_->find(base_name);
         if (center && p.kind != Parameter::Kind::Deform)
             throw Error("parameter '" + op.name + "': a center (@x,y,z) applies to deformation handles only");
-        Entry e{op.name, Kind::Data, dimension_, p.size, 0, -1, op.learning_rate, op.lower, op.upper};
+        Entry e{op.name, Kind::Data, dimension_, p.size, 0, -1, op.learning_rate, op.lower, op.upper, -1, -1, {}};
         if (p.kind == Parameter::Kind::Data) {
             e.param_offset = data_dimension;
             data_dimension += p.size;
@@ -84,6 +84,14 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
         }
         dimension_ += e.size;
         entries_.push_back(e);
+    }
+    for (size_t i = 0; i < entries_.size(); ++i) {
+        Entry& e = entries_[i];
+        const std::vector<bool>& free = parameters[i].free;
+        if (!free.empty() && free.size() != size_t(e.size))
+            throw Error("parameter '" + e.name + "': 'free' has " + std::to_string(free.size()) +
+                        " entries for " + std::to_string(e.size) + " components");
+        e.free = free.empty() ? std::vector<bool>(size_t(e.size), true) : free;
     }
     for (const Shape* shape : deformed)
         if (pose_of.count(shape) || deformation_of.count(shape))
@@ -185,7 +193,11 @@ void InverseProblem::adam_step(Adam& adam, const std::vector<double>& gradient, 
     std::vector<double> x = before;
     for (const Entry& e : entries_)
         if (e.kind == Kind::Rotate) put(x, e.offset, Vec3d(0.0));
-    adam.step(x, gradient, learning_rate_scale);
+    std::vector<double> g = gradient;
+    for (const Entry& e : entries_)
+        for (int k = 0; k < e.size; ++k)
+            if (!e.free[size_t(k)]) g[size_t(e.offset + k)] = 0.0;
+    adam.step(x, g, learning_rate_scale);
     std::vector<double> delta(x.size());
     for (const Entry& e : entries_)
         for (int k = e.offset; k < e.offset + e.size; ++k)

@@ -29,6 +29,7 @@ struct OptimizedParameter {
     double learning_rate = 0.01;
     double lower = -std::numeric_limits<double>::infinity(); // not allowed for rotations
     double upper = std::numeric_limits<double>::infinity();
+    std::vector<bool> free = {}; // which components are optimized (empty: all); the others keep their init
 };
 
 // ‖a − b‖ / ‖b‖ (‖a − b‖ when b = 0).
@@ -45,11 +46,12 @@ class InverseProblem {
         int pose = -1;            // Translate / Rotate: index into poses()
         double learning_rate = 0.01, lower = 0, upper = 0;
         int deformation = -1, handle = -1; // Deform: index into the deformations and the handle in it
+        std::vector<bool> free;            // size components: whether each is optimized
     };
 
     // Resolves the names against the scene. Throws Error for unknown names, camera motions, scaling, a
-    // parameter given twice, vertex_positions together with a pose of the same shape, and bounds on a
-    // rotation.
+    // parameter given twice, vertex_positions together with a pose of the same shape, bounds on a rotation,
+    // and a `free` mask whose length is not the parameter's number of components.
     InverseProblem(Scene& scene, const std::vector<OptimizedParameter>& parameters);
     ~InverseProblem();
 
@@ -67,7 +69,8 @@ class InverseProblem {
     void set_values(const std::vector<double>& x);
     // x ⊕ δ: Data and translations add δ, rotations compose on the left with exp([δ]×) (δ in degrees).
     void retract(const std::vector<double>& delta);
-    // One Adam step with a gradient in the tangent layout (rotations: increments from 0, then retracted).
+    // One Adam step with a gradient in the tangent layout (rotations: increments from 0, then retracted);
+    // components that are not free get a zero gradient, hence no step.
     void adam_step(Adam& adam, const std::vector<double>& gradient, double learning_rate_scale);
 
     // dL/dx in the tangent layout for the adjoint ∂L/∂I at the current values, by a derivative method
