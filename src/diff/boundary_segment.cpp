@@ -3,8 +3,8 @@
 #include "core/warp.h"
 #include "diff/interior_media.h"
 #include "diff/media_walk.h"
-#include "render/volume_visibility.h"
 #include "render/light_medium.h"
+#include "render/volume_visibility.h"
 #include "scene/shape_interaction.h"
 
 #include <algorithm>

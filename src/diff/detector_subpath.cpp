@@ -1,8 +1,8 @@
 #include "diff/detector_subpath.h"
 
 #include "diff/media_walk.h"
-#include "render/volume_visibility.h"
 #include "render/adjoint_shading.h"
+#include "render/volume_visibility.h"
 
 namespace penumbra {
 

@@ -28,10 +28,10 @@ enum class FirstVertex { Auto, ImageSpace, Material };
 FirstVertex parse_first_vertex(const std::string& name);
 
 // Whether the estimators use the image-space first vertex for these parameters: Auto picks it unless the
-// sensor moves, a moving shape has a texture that jumps inside its triangles, or a point or spot light moves in
-// a scene with media. Requesting ImageSpace when
-// the sensor moves is an Error; so is, for a sensor that does not project points, Material, a moving sensor,
-// or a moving shape whose texture jumps inside its triangles.
+// sensor moves, a moving shape has a texture that jumps inside its triangles, or a point or spot light moves
+// in a scene with media. Requesting ImageSpace when the sensor moves is an Error; so is, for a sensor that
+// does not project points, Material, a moving sensor, or a moving shape whose texture jumps inside its
+// triangles.
 bool image_space_first_vertex(const Scene& scene, const Parameters& params, FirstVertex choice);
 
 // Throws Error when the sensor does not project points and the parameters move geometry: the boundary term

@@ -42,7 +42,7 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
         const Parameter& p = params_->find(base_name);
         if (center && p.kind != Parameter::Kind::Deform)
             throw Error("parameter '" + op.name + "': a center (@x,y,z) applies to deformation handles only");
-        Entry e{op.name, Kind::Data, dimension_, p.size, 0, -1, op.learning_rate, op.lower, op.upper, -1, -1, {}};
+        Entry e{op.name, Kind::Data, dimension_, p.size, 0, -1, op.learning_rate, op.lower, op.upper};
         if (p.kind == Parameter::Kind::Data) {
             e.param_offset = data_dimension;
             data_dimension += p.size;

@@ -46,7 +46,7 @@ class InverseProblem {
         int pose = -1;            // Translate / Rotate: index into poses()
         double learning_rate = 0.01, lower = 0, upper = 0;
         int deformation = -1, handle = -1; // Deform: index into the deformations and the handle in it
-        std::vector<bool> free;            // size components: whether each is optimized
+        std::vector<bool> free = {};       // size components: whether each is optimized
     };
 
     // Resolves the names against the scene. Throws Error for unknown names, camera motions, scaling, a

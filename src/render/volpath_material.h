@@ -192,7 +192,8 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
                 const Medium* shadow_medium =
                     v.surface ? target_medium(*v.hit.shape, v.hit.n, ds.d, v.medium) : v.medium;
                 const Color3f tr = is_black(f0) ? Color3f(0.f)
-                                                : segment_transmittance(scene, shadow_ray, shadow_medium, sampler, rays, nullptr, &shadow);
+                                                : segment_transmittance(scene, shadow_ray, shadow_medium,
+                                                                        sampler, rays, nullptr, &shadow);
                 if (!is_black(tr)) {
                     const float w = ds.delta ? 1.f : mis_power(ds.pdf, pdf);
                     if constexpr (reference) {

@@ -15,9 +15,9 @@ Color3f segment_transmittance(const Scene& scene, Ray ray, const Medium* medium,
     Color3f tr(1.f);
     if (pieces) pieces->clear();
     float travelled = 0.f;
+    if (end_medium) *end_medium = medium;
     // A bound on the number of null surfaces crossed guards against rays stuck on coincident surfaces.
     for (int crossing = 0; crossing < 256; ++crossing) {
-        if (end_medium) *end_medium = medium;
         ++rays.rays;
         const SurfaceInteraction3f si = scene.intersect(ray);
         const float end = si.is_valid() ? si.t : ray.tmax;
