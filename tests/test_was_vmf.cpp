@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 using namespace penumbra;
@@ -68,10 +69,12 @@ TEST(Vmf, SamplingMatchesCdfAndMean) {
             chi2 += (c - expected) * (c - expected) / expected;
         // 99 degrees of freedom: P(χ² > 160) ≈ 1e-4.
         EXPECT_LT(chi2, 160.0) << "kappa " << kappa;
+        std::printf("vMF kappa %g: chi2 %.1f (99 dof)", double(kappa), chi2);
         // E[1 − cosθ] = 1/κ − 2 e^{−2κ} / (1 − e^{−2κ}) (1 − the mean resultant length coth κ − 1/κ).
         const double k = kappa;
         const double mean_exact = 1.0 / k - 2.0 / std::expm1(2.0 * k);
         const double mean = sum / n, se = std::sqrt((sum2 / n - mean * mean) / n);
+        std::printf(", E[1 - cos] z = %.2f\n", (mean - mean_exact) / se);
         EXPECT_LT(std::abs(mean - mean_exact) / se, 4.0)
             << "kappa " << kappa << " mean " << mean << " exact " << mean_exact;
     }

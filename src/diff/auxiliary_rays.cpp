@@ -12,7 +12,12 @@ AuxiliarySample trace_auxiliary(const Scene& scene, const MaterialForm& form, co
         a.warp = Vec3<Var>(s.direction); // an escaped ray's direction does not move with the geometry
         return a;
     }
-    const Vec3<Var> d = form.vertex(hit).p - x.position;
+    // y(θ) = X(p, θ) at the hit's material point: the barycentric blend of its moving triangle's vertices.
+    const uint32_t* i = &hit.shape->mesh.indices[3 * size_t(hit.prim_index)];
+    const float b1 = hit.bary.x, b2 = hit.bary.y;
+    const Vec3<Var> y = form.position(*hit.shape, i[0]) * Var(1.f - b1 - b2) +
+                        form.position(*hit.shape, i[1]) * Var(b1) + form.position(*hit.shape, i[2]) * Var(b2);
+    const Vec3<Var> d = y - x.position;
     a.warp = d / norm(d);
     return a;
 }

@@ -12,7 +12,7 @@ namespace penumbra {
 
 struct HarmonicWeight {
     float kappa = 1e4f;   // concentration of the distance D (the auxiliary vMF's κ)
-    float exponent = 2.f; // γ
+    float exponent = 3.f; // γ
 
     struct Value {
         double w;       // w(ω, ω')

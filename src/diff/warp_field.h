@@ -19,7 +19,8 @@
 
 namespace penumbra {
 
-// Options of the estimator (defaults: NOTES-public-implementations.md, the authors' code).
+// Options of the estimator. Defaults: κ = 1e4 and N' = 8 (paper §5.1), antithetic on and Russian roulette
+// with p = 0.4 over batches of 4 (the authors' code, NOTES-public-implementations.md), cap 512 (paper §5.5).
 struct WarpOptions {
     HarmonicWeight weight;  // κ of the vMF auxiliary distribution and of D; exponent γ
     int aux_count = 8;      // N' of the consistent estimator (Algorithm 2)
