@@ -489,3 +489,22 @@ TEST(WasControlVariate, TiltedFlatEmitterInPixel) {
     EXPECT_LT(std::abs(z), 4.0);
     EXPECT_LT(controlled.variance(), 0.1 * plain.variance());
 }
+
+TEST(WasWarpedVertex, FollowsMovingPlaneAndWarpedDirection) {
+    // The occluder plane z = H + θ and the direction ω + θ v from the origin: the hit is p(θ) = d(θ) (H + θ)
+    // / d_z(θ), so ∂θ p = ω / ω_z + H (v / ω_z − ω v_z / ω_z²).
+    const OccluderScene o(4);
+    o.params->enable({parse_param_selection("occluder.translate=0,0,1")});
+    const Vec3f omega = normalize(Vec3f(0.1f, -0.2f, 1.f)), v(0.3f, 0.1f, -0.05f);
+    Tape::current().clear();
+    const SurfaceInteraction3f hit = o.scene->intersect(Ray(Vec3f(0.f), omega));
+    ASSERT_TRUE(hit.is_valid());
+    const Var theta = Var::parameter(0.f, 0);
+    const Vec3<Var> direction = Vec3<Var>(omega) + Vec3<Var>(v) * theta;
+    const SurfaceInteraction<Var> y = warped_vertex(*o.params, hit, Vec3<Var>(Var(0.f)), direction);
+    const std::vector<float> unit = {1.f};
+    const Vec3f dp(derivative(y.p.x, unit), derivative(y.p.y, unit), derivative(y.p.z, unit));
+    const Vec3f expected = omega / omega.z + (v / omega.z - omega * (v.z / (omega.z * omega.z))) * H;
+    EXPECT_LT(norm(dp - expected), 1e-4f) << dp.x << ' ' << dp.y << ' ' << dp.z;
+    EXPECT_LT(norm(Vec3f(y.p.x.v, y.p.y.v, y.p.z.v) - hit.p), 1e-5f);
+}
