@@ -534,3 +534,59 @@ TEST(WasWarpedVertex, FollowsMovingPlaneAndWarpedDirection) {
     EXPECT_LT(norm(dp - expected), 1e-4f) << dp.x << ' ' << dp.y << ' ' << dp.z;
     EXPECT_LT(norm(Vec3f(y.p.x.v, y.p.y.v, y.p.z.v) - hit.p), 1e-5f);
 }
+
+namespace {
+
+// The film-space estimator on V(x') = θ (μ + J (x' − x)) with B = 1: E[∇·V] = tr J, and V = μ exactly for J =
+// 0.
+double pixel_divergence(const Vec2f& mu, const float (&j)[2][2], const WarpOptions& o, float sigma, Rng& rng,
+                        Vec2f* warp = nullptr) {
+    Tape::current().clear();
+    const Var theta = Var::parameter(0.f, 0);
+    const Vec2f x(3.5f, 7.25f);
+    std::vector<PixelAuxiliarySample> aux = sample_pixel_auxiliary(sigma, o, rng);
+    for (PixelAuxiliarySample& a : aux) {
+        const Vec2f d = a.offset;
+        const Vec2f v(mu.x + j[0][0] * d.x + j[0][1] * d.y, mu.y + j[1][0] * d.x + j[1][1] * d.y);
+        a.warp = Vec2<Var>(Var(x.x + d.x) + theta * Var(v.x), Var(x.y + d.y) + theta * Var(v.y));
+    }
+    const PixelWarpEstimate e = estimate_pixel_warp(x, aux, sigma, o);
+    const std::vector<float> unit = {1.f};
+    if (warp) *warp = Vec2f(derivative(e.position.x, unit), derivative(e.position.y, unit));
+    EXPECT_EQ(e.position.x.v, x.x);
+    return derivative(e.jacobian, unit);
+}
+
+} // namespace
+
+TEST(WasPixelWarp, UniformExactAndLinearDivergenceUnbiased) {
+    const float sigma = 0.25f;
+    const float zero[2][2] = {{0.f, 0.f}, {0.f, 0.f}}, j[2][2] = {{1.5f, 0.2f}, {-0.4f, 0.5f}};
+    for (bool unbiased : {false, true}) {
+        WarpOptions o;
+        o.unbiased = unbiased;
+        Rng rng{PCG32(23, uint64_t(unbiased))};
+        for (int i = 0; i < 20; ++i) {
+            Vec2f v;
+            EXPECT_NEAR(pixel_divergence(Vec2f(0.3f, -0.7f), zero, o, sigma, rng, &v), 0.0, 1e-4);
+            EXPECT_NEAR(v.x, 0.3f, 1e-4f);
+            EXPECT_NEAR(v.y, -0.7f, 1e-4f);
+        }
+    }
+    WarpOptions o;
+    o.unbiased = true;
+    o.antithetic = false;
+    Rng rng{PCG32(29)};
+    std::vector<double> means;
+    for (int b = 0; b < 20; ++b) {
+        double sum = 0.0;
+        for (int i = 0; i < 1000; ++i)
+            sum += pixel_divergence(Vec2f(0.f), j, o, sigma, rng);
+        means.push_back(sum / 1000.0);
+    }
+    const BatchMean m = batch_mean(means);
+    const double z = (m.mean - 2.0) / m.se;
+    std::printf("film-space linear field, unbiased: ∇·V = %.4f ± %.4f (exact 2.0, z = %.2f)\n", m.mean, m.se,
+                z);
+    EXPECT_LT(std::abs(z), 4.0);
+}

@@ -44,19 +44,22 @@ struct WarpEstimate {
     Var jacobian;        // value 1, derivative ∇·V(ω) (Eq. 12)
 };
 
-// The auxiliary directions at ω (Algorithm 2 line 3, Algorithm 3 lines 2–4): N' samples (antithetic pairs
-// when enabled), or for the unbiased estimator a Geom(rr_stop) number of batches of rr_batch samples, capped.
-// `Rng` has next_1d() and next_2d() (Sampler).
+// The number of auxiliary samples (Algorithm 2: N'; Algorithm 3 line 2: a Geom(rr_stop) number of batches of
+// rr_batch samples, capped at rr_cap).
+template <typename Rng> int auxiliary_count(const WarpOptions& o, Rng& rng) {
+    if (!o.unbiased) return o.aux_count;
+    const int max_batches = std::max(1, o.rr_cap / o.rr_batch);
+    int batches = 1;
+    while (batches < max_batches && rng.next_1d() >= o.rr_stop)
+        ++batches;
+    return batches * o.rr_batch;
+}
+
+// The auxiliary directions at ω (Algorithm 2 line 3, Algorithm 3 lines 2–4), in antithetic pairs when
+// enabled. `Rng` has next_1d() and next_2d() (Sampler).
 template <typename Rng>
 std::vector<VmfSample> sample_auxiliary(const Vec3f& omega, const WarpOptions& o, Rng& rng) {
-    int count = o.aux_count;
-    if (o.unbiased) {
-        const int max_batches = std::max(1, o.rr_cap / o.rr_batch);
-        int batches = 1;
-        while (batches < max_batches && rng.next_1d() >= o.rr_stop)
-            ++batches;
-        count = batches * o.rr_batch;
-    }
+    const int count = auxiliary_count(o, rng);
     const Frame3f frame(omega);
     std::vector<VmfSample> samples;
     samples.reserve(size_t(count));
@@ -67,9 +70,60 @@ std::vector<VmfSample> sample_auxiliary(const Vec3f& omega, const WarpOptions& o
     return samples;
 }
 
-// V(ω) and ∇·V(ω) from the auxiliary samples: Algorithm 2 (consistent, self-normalized: lines 10–13), or when
-// o.unbiased Algorithm 3 as a telescoping sum over batch prefixes, F = Σ_k λ_k F_k with F_k Algorithm 2 on
-// the first k batches and λ_k = 1/P(N ≥ k) − 1/P(N ≥ k+1) (λ_N = 1/P(N ≥ N)), so E[F] = lim F_k.
+// Per-sample coefficients of an estimate from weights w_i and gradients ∂w_i (both already divided by the
+// auxiliary density; Algorithm 2 lines 6–7): V = Σ field_i V_i and ∇·V = Σ ⟨divergence_i, V_i⟩. Algorithm 2
+// (consistent, self-normalized: lines 10–13), or when o.unbiased Algorithm 3 as a telescoping sum over batch
+// prefixes, F = Σ_k λ_k F_k with F_k Algorithm 2 on the first k batches and λ_k = 1/P(N ≥ k) − 1/P(N ≥ k+1)
+// (λ_N = 1/P(N ≥ N)), so that E[F] = lim F_k. Both are exact for a uniform field (Σ divergence_i = 0).
+struct WarpCoefficients {
+    std::vector<double> field;
+    std::vector<Vec3f> divergence;
+};
+WarpCoefficients warp_coefficients(std::span<const double> w, std::span<const Vec3f> grad_w,
+                                   const WarpOptions& o);
+
+// V(ω) and ∇·V(ω) on the sphere from the auxiliary samples (the coefficients above, with P(ω) and the
+// curvature term −2⟨ω, V⟩).
 WarpEstimate estimate_warp(const Vec3f& omega, std::span<const AuxiliarySample> aux, const WarpOptions& o);
+
+// The primary vertex: the domain is the film (pixel units), the auxiliary positions are x' ~ N(x, σ² I) with
+// σ = 1/√κ' chosen by the caller (the film's Gaussian filter's scale, or smaller), and the direct warp is the
+// film motion ∂θ x' of the point seen through x' (Eq. 6 with the camera's projection in place of ∂ω y).
+struct PixelAuxiliarySample {
+    Vec2f offset;         // x' − x
+    float pdf = 0.f;      // N(0, σ² I) density of the offset
+    float boundary = 1.f; // B at the point seen through x'
+    Vec2<Var> warp;       // value x', derivative ∂θ x'
+};
+struct PixelWarpEstimate {
+    Vec2<Var> position; // value x, derivative V(x)
+    Var jacobian;       // value 1, derivative ∇·V(x)
+};
+
+// Offsets x' − x ~ N(0, σ² I) (Box–Muller), the antithetic partner being −(x' − x); boundary and warp are
+// left for the caller to fill by tracing the camera rays through x + offset.
+template <typename Rng>
+std::vector<PixelAuxiliarySample> sample_pixel_auxiliary(float sigma, const WarpOptions& o, Rng& rng) {
+    const int count = auxiliary_count(o, rng);
+    std::vector<PixelAuxiliarySample> samples;
+    samples.reserve(size_t(count));
+    while (int(samples.size()) < count) {
+        const Vec2f u = rng.next_2d();
+        const float r = sigma * std::sqrt(-2.f * std::log1p(-u.x)), phi = 2.f * Pi * u.y;
+        PixelAuxiliarySample s;
+        s.offset = Vec2f(r * std::cos(phi), r * std::sin(phi));
+        s.pdf = std::exp(-0.5f * (r * r) / (sigma * sigma)) / (2.f * Pi * sigma * sigma);
+        samples.push_back(s);
+        if (o.antithetic && int(samples.size()) < count) {
+            s.offset = Vec2f(-s.offset.x, -s.offset.y);
+            samples.push_back(s);
+        }
+    }
+    return samples;
+}
+
+// V(x) and ∇·V(x) on the film (Eq. 7 and 12 with the planar distance D(x, x') = e^{|x' − x|²/(2σ²)} − 1).
+PixelWarpEstimate estimate_pixel_warp(const Vec2f& x, std::span<const PixelAuxiliarySample> aux, float sigma,
+                                      const WarpOptions& o);
 
 } // namespace penumbra
