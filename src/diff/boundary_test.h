@@ -25,7 +25,6 @@ class BoundaryTest {
     float operator()(const SurfaceInteraction3f& hit, const Vec3f& origin, const Vec3f& direction) const;
     // B_v of vertex v of `shape` (step 2).
     float vertex_value(const Shape& shape, uint32_t v, const Vec3f& origin, const Vec3f& direction) const;
-    float spread() const { return spread_; }
 
   private:
     struct MeshEdges {
