@@ -1,0 +1,86 @@
+#include "diff/boundary_test.h"
+
+#include "core/error.h"
+
+#include <map>
+#include <tuple>
+
+namespace penumbra {
+
+namespace {
+
+std::vector<uint32_t> canonical_ids(const TriangleMesh& mesh) {
+    std::map<std::tuple<float, float, float>, uint32_t> ids;
+    std::vector<uint32_t> id(mesh.positions.size());
+    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+        const Vec3f& p = mesh.positions[v];
+        id[v] = ids.try_emplace({p.x, p.y, p.z}, uint32_t(v)).first->second;
+    }
+    return id;
+}
+
+} // namespace
+
+BoundaryTest::BoundaryTest(const Scene& scene, float spread) : spread_(spread) {
+    for (const auto& shape : scene.shapes) {
+        const TriangleMesh& mesh = shape->mesh;
+        MeshEdges m;
+        m.canonical = canonical_ids(mesh);
+        m.edges = discontinuity_edges(mesh);
+        const size_t n = mesh.vertex_count();
+        m.offsets.assign(n + 1, 0);
+        for (const Edge& e : m.edges) {
+            ++m.offsets[m.canonical[e.v0] + 1];
+            ++m.offsets[m.canonical[e.v1] + 1];
+        }
+        for (size_t v = 0; v < n; ++v)
+            m.offsets[v + 1] += m.offsets[v];
+        m.ids.resize(m.offsets[n]);
+        std::vector<uint32_t> fill(m.offsets.begin(), m.offsets.end() - 1);
+        for (size_t k = 0; k < m.edges.size(); ++k) {
+            m.ids[fill[m.canonical[m.edges[k].v0]]++] = uint32_t(k);
+            m.ids[fill[m.canonical[m.edges[k].v1]]++] = uint32_t(k);
+        }
+        // Area-weighted sum of the face normals around each position ("the average normal of all adjacent
+        // faces").
+        m.normals.assign(n, Vec3f(0.f));
+        for (size_t f = 0; f < mesh.face_count(); ++f) {
+            const Vec3f nf = face_normal(mesh, int32_t(f));
+            for (int k = 0; k < 3; ++k)
+                m.normals[m.canonical[mesh.indices[3 * f + k]]] += nf;
+        }
+        for (Vec3f& nv : m.normals)
+            if (norm(nv) > 0.f) nv = normalize(nv);
+        meshes_.emplace(shape.get(), std::move(m));
+    }
+}
+
+const BoundaryTest::MeshEdges& BoundaryTest::edges_of(const Shape& shape) const {
+    const auto it = meshes_.find(&shape);
+    if (it == meshes_.end())
+        throw Error("BoundaryTest: shape '" + shape.id + "' is not in the scene it was built for");
+    return it->second;
+}
+
+float BoundaryTest::vertex_value(const Shape& shape, uint32_t v, const Vec3f& origin,
+                                 const Vec3f& direction) const {
+    const MeshEdges& m = edges_of(shape);
+    const uint32_t c = m.canonical[v];
+    for (uint32_t k = m.offsets[c]; k < m.offsets[c + 1]; ++k)
+        if (is_silhouette(shape.mesh, m.edges[m.ids[k]], origin)) return 0.f;
+    const float cos_theta = dot(direction, m.normals[c]);
+    const float sin2 = std::max(0.f, 1.f - cos_theta * cos_theta);
+    return (1.f - sin2) / (1.f - (1.f - spread_) * sin2);
+}
+
+float BoundaryTest::operator()(const SurfaceInteraction3f& hit, const Vec3f& origin,
+                               const Vec3f& direction) const {
+    if (!hit.is_valid()) return 1.f;
+    const uint32_t* i = &hit.shape->mesh.indices[3 * size_t(hit.prim_index)];
+    const float b1 = hit.bary.x, b2 = hit.bary.y, b0 = 1.f - b1 - b2;
+    return b0 * vertex_value(*hit.shape, i[0], origin, direction) +
+           b1 * vertex_value(*hit.shape, i[1], origin, direction) +
+           b2 * vertex_value(*hit.shape, i[2], origin, direction);
+}
+
+} // namespace penumbra
