@@ -1,0 +1,107 @@
+// The validation scenes of paper 004 (warped-area sampling, docs/warped-area-sampling.md) against central
+// finite differences: a cube's silhouette, a rotating corkscrew's soft shadow and a dense hedge (220k
+// triangles) seen in a glossy floor (scenes/was/suite.json). Each derivative method of `methods` below,
+// through the method front (diff/method.h) as the command line and the optimizer reach it, at each scene's CI
+// resolution, against the references that `penumbra ad-suite --fd-only` stored in scenes/was/fd (or, when a
+// scene changed since, computed here at the same settings: slow; regenerate the cache as suite.json says).
+// Tolerances come from standard errors (tests/diff_check.h: z of the image mean, relerr and relerr4 against
+// their noise expectations, 4σ outliers of 2 × 2 blocks). Every parameter moves geometry, so the interior
+// term alone (the method's first term) must fail the same check: the boundary contribution carries visible
+// signal.
+#include "diff/ad_suite.h"
+#include "diff/method.h"
+#include "diff_check.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <vector>
+
+using namespace penumbra;
+using namespace penumbra::test;
+
+namespace {
+
+const std::string manifest = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/was/suite.json";
+const std::string reference_cache = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/was/fd";
+// The seed of the stored references (penumbra ad-suite's): independent of the derivative's seeds below.
+constexpr uint64_t ReferenceSeed = 2;
+
+// Batches of the derivative: its per-pixel standard errors (t with 15 degrees of freedom, diff_check.h).
+constexpr int DerivativeBatches = 16;
+
+// The derivative methods checked on every scene, by their names in derivative_methods().
+const std::vector<std::string> methods = {"psdr"};
+
+uint64_t test_seed() {
+    // PENUMBRA_TEST_SEED re-runs the checks with other random numbers (to see that they do not pass by luck).
+    const char* env = std::getenv("PENUMBRA_TEST_SEED");
+    return env ? std::strtoull(env, nullptr, 10) : 0;
+}
+
+std::vector<std::string> scene_names() {
+    try {
+        std::vector<std::string> names;
+        for (const AdSuiteScene& s : load_ad_suite(manifest).scenes)
+            names.push_back(s.name);
+        return names;
+    } catch (const Error&) {
+        return {"manifest"};
+    }
+}
+
+class WasScene : public testing::TestWithParam<std::tuple<std::string, std::string>> {};
+
+TEST_P(WasScene, MatchesFiniteDifferences) {
+    const auto& [method, name] = GetParam();
+    const AdSuite suite = load_ad_suite(manifest);
+    const AdSuiteScene* found = nullptr;
+    for (const AdSuiteScene& s : suite.scenes)
+        found = s.name == name ? &s : found;
+    ASSERT_NE(found, nullptr);
+    const AdSuiteScene& s = *found;
+    ASSERT_TRUE(missing_files(s).empty()) << s.file << " needs " << missing_files(s).front()
+                                          << " (the build writes it: scripts/make_was_meshes.py)";
+    const uint64_t seed = test_seed();
+    AdSuiteCase c = load_case(s, s.ci_res);
+    const FdSettings ref = fd_settings(suite, s, s.ci_res);
+    const std::optional<FiniteDifference> stored =
+        read_cached_reference(reference_cache, s, s.ci_res, ref.eps, ref.spp, {}, ReferenceSeed);
+    if (!stored)
+        std::printf("  %s: no stored reference matches the scene; computing it (slow)\n", s.name.c_str());
+    const FiniteDifference fd =
+        stored ? *stored
+               : suite_reference(*c.scene, *c.params, ref.eps, ref.spp, ReferenceSeed + 1000 * seed, 0);
+
+    MethodRun run;
+    run.spp = s.spp;
+    run.batches = DerivativeBatches;
+    run.seed = 1 + 1000 * seed;
+    const MethodDerivative d = make_method(method, MethodOptions())->derivative(*c.scene, *c.params, run);
+    ASSERT_FALSE(d.terms.empty());
+    ASSERT_EQ(d.terms[0].name, "interior");
+    const DiffCheck total = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const DiffCheck interior =
+        check_against(d.terms[0].value, d.terms[0].stderr_img, fd.derivative, fd.stderr_img);
+    std::printf("  %s at %dx%d, %s %d spp (%.2f s, %s), reference h = %g at %d spp per side (%.0f s%s)\n"
+                "  %s: %s\n  interior only: %s\n",
+                s.name.c_str(), s.ci_res, s.ci_res, method.c_str(), s.spp, d.seconds, d.description.c_str(),
+                ref.eps, ref.spp, fd.seconds, stored ? ", stored" : "", method.c_str(),
+                describe(total).c_str(), describe(interior).c_str());
+
+    EXPECT_TRUE(total.passes()) << describe(total);
+    EXPECT_FALSE(interior.passes()) << "the interior term alone should miss the boundary contribution: "
+                                    << describe(interior);
+}
+
+INSTANTIATE_TEST_SUITE_P(WasValidation, WasScene,
+                         testing::Combine(testing::ValuesIn(methods), testing::ValuesIn(scene_names())),
+                         [](const testing::TestParamInfo<WasScene::ParamType>& info) {
+                             return std::get<0>(info.param) + "_" + std::get<1>(info.param);
+                         });
+
+} // namespace
