@@ -36,8 +36,9 @@ constexpr uint64_t ReferenceSeed = 2;
 constexpr int DerivativeBatches = 16;
 
 // The derivative methods checked on every scene: a label (the test's name), the method's name in
-// derivative_methods() and its options as on the command line. psdr's automatic first vertex is image-space
-// on these scenes (a static camera); its material form is checked too, since the two differ on the corkscrew.
+// derivative_methods() and its options as on the command line. psdr's automatic first vertex picks the
+// image-space form on the cube and the corkscrew; the material form is checked too (they differ on the
+// corkscrew).
 struct MethodCase {
     std::string label, name;
     std::map<std::string, std::string> options;
@@ -73,19 +74,17 @@ std::vector<std::string> scene_names() {
 
 class WasScene : public testing::TestWithParam<std::tuple<std::string, std::string>> {};
 
-// Cases a method does not pass (reported as skipped, never as passed):
-//  psdr on hedge:      the indirect boundary term samples the hedge's ~440k edges by length and connects them
-//  to
-//                      the camera through the glossy floor; few segments are unoccluded and fall in the
-//                      floor's narrow lobe, so its estimate is fireflies (at 256 spp relerr ~7 with a noise
-//                      expectation of ~5 and ~60% of the blocks beyond 4σ: the batch standard errors do not
-//                      hold; paper 004 §6, Fig. 13);
-//  psdr on corkscrew:  with the image-space first vertex (auto's choice) the derivative of the rotating helix
-//  is
-//                      biased: at 2048 spp relerr4 0.20 against a noise expectation of 0.04 and z ≈ −8,
-//                      against references at steps 0.05 and 0.025 rad that agree; the material form agrees
-//                      (relerr4 0.083, noise 0.057, z 1.3), and so does the image-space form when the
-//                      corkscrew translates.
+// Cases a method does not pass (reported as skipped, never as passed).
+//
+// psdr on hedge: the indirect boundary term samples the hedge's ~440k edges by length and connects them to
+// the camera through the glossy floor; few segments are unoccluded and in the floor's narrow lobe, so its
+// estimate is fireflies (256 spp: relerr ~7 with a noise expectation of ~5, ~60% of the blocks beyond 4σ, the
+// batch standard errors do not hold; paper 004 §6, Fig. 13).
+//
+// psdr on corkscrew: with the image-space first vertex (auto's choice here) the derivative is biased (2048
+// spp: relerr4 0.20 against a noise expectation of 0.04, z ≈ −8, against references at 0.05 and 0.025 rad
+// that agree; translating the corkscrew, z ≈ +6); the material form agrees (relerr4 0.083, noise 0.057,
+// z 1.3).
 const char* open_problem(const std::string& label, const std::string& scene) {
     if (label.rfind("psdr", 0) == 0 && scene == "hedge")
         return "edge sampling's indirect term is fireflies on the hedge's glossy reflection at test budgets";
