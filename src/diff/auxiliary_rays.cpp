@@ -3,11 +3,11 @@
 namespace penumbra {
 
 AuxiliarySample trace_auxiliary(const Scene& scene, const MaterialForm& form, const BoundaryTest& boundary,
-                                const WarpVertex& x, const VmfSample& s) {
+                                const WarpVertex& x, const VmfSample& s, float scale) {
     AuxiliarySample a;
     a.vmf = s;
     const SurfaceInteraction3f hit = scene.intersect(x.reference.spawn_ray(s.direction));
-    a.boundary = boundary(hit, x.reference.p, s.direction);
+    a.boundary = boundary(hit, x.reference.p, s.direction, scale);
     if (!hit.is_valid()) {
         a.warp = Vec3<Var>(s.direction); // an escaped ray's direction does not move with the geometry
         return a;

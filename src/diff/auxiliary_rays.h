@@ -16,9 +16,10 @@ struct WarpVertex {
     Vec3<Var> position;      // x(θ); constant when the vertex does not move
 };
 
-// Traces one auxiliary direction (Algorithm 2 lines 4–8).
+// Traces one auxiliary direction (Algorithm 2 lines 4–8); `scale` is the boundary test's distance scale
+// (diff/boundary_test.h; κ in the estimators, 0 for the paper's vertex rule).
 AuxiliarySample trace_auxiliary(const Scene& scene, const MaterialForm& form, const BoundaryTest& boundary,
-                                const WarpVertex& x, const VmfSample& s);
+                                const WarpVertex& x, const VmfSample& s, float scale = 0.f);
 
 // Algorithm 2 / 3 at x for the direction ω: samples the auxiliary directions, traces them and estimates the
 // warp field and its divergence.
@@ -27,7 +28,7 @@ WarpEstimate estimate_warp_at(const Scene& scene, const MaterialForm& form, cons
                               const WarpVertex& x, const Vec3f& omega, const WarpOptions& o, Rng& rng) {
     std::vector<AuxiliarySample> aux;
     for (const VmfSample& s : sample_auxiliary(omega, o, rng))
-        aux.push_back(trace_auxiliary(scene, form, boundary, x, s));
+        aux.push_back(trace_auxiliary(scene, form, boundary, x, s, o.weight.kappa));
     return estimate_warp(omega, aux, o);
 }
 

@@ -62,25 +62,72 @@ const BoundaryTest::MeshEdges& BoundaryTest::edges_of(const Shape& shape) const 
     return it->second;
 }
 
-float BoundaryTest::vertex_value(const Shape& shape, uint32_t v, const Vec3f& origin,
-                                 const Vec3f& direction) const {
-    const MeshEdges& m = edges_of(shape);
-    const uint32_t c = m.canonical[v];
-    for (uint32_t k = m.offsets[c]; k < m.offsets[c + 1]; ++k)
-        if (is_silhouette(shape.mesh, m.edges[m.ids[k]], origin)) return 0.f;
-    const float cos_theta = dot(direction, m.normals[c]);
+float BoundaryTest::normal_value(const MeshEdges& m, uint32_t v, const Vec3f& direction) const {
+    const float cos_theta = dot(direction, m.normals[m.canonical[v]]);
     const float sin2 = std::max(0.f, 1.f - cos_theta * cos_theta);
     return (1.f - sin2) / (1.f - (1.f - spread_) * sin2);
 }
 
-float BoundaryTest::operator()(const SurfaceInteraction3f& hit, const Vec3f& origin,
-                               const Vec3f& direction) const {
+bool BoundaryTest::on_boundary(const Shape& shape, const MeshEdges& m, uint32_t v, uint32_t w,
+                               const Vec3f& origin, bool& to_w) const {
+    const uint32_t c = m.canonical[v], cw = m.canonical[w];
+    bool any = false;
+    for (uint32_t k = m.offsets[c]; k < m.offsets[c + 1]; ++k) {
+        const Edge& e = m.edges[m.ids[k]];
+        if (!is_silhouette(shape.mesh, e, origin)) continue;
+        any = true;
+        if (m.canonical[e.v0] == cw || m.canonical[e.v1] == cw) to_w = true;
+    }
+    return any;
+}
+
+float BoundaryTest::vertex_value(const Shape& shape, uint32_t v, const Vec3f& origin,
+                                 const Vec3f& direction) const {
+    const MeshEdges& m = edges_of(shape);
+    bool unused = false;
+    return on_boundary(shape, m, v, v, origin, unused) ? 0.f : normal_value(m, v, direction);
+}
+
+namespace {
+
+// The angle at `o` between the directions to `p` and to the point of segment [a, b] nearest to p.
+float angle_to_segment(const Vec3f& o, const Vec3f& p, const Vec3f& a, const Vec3f& b) {
+    const Vec3f ab = b - a;
+    const float len2 = dot(ab, ab);
+    const float t = len2 > 0.f ? std::clamp(dot(p - a, ab) / len2, 0.f, 1.f) : 0.f;
+    const Vec3f u = normalize(p - o), q = normalize(a + ab * t - o);
+    return 2.f * std::asin(std::min(1.f, 0.5f * norm(u - q)));
+}
+
+} // namespace
+
+float BoundaryTest::operator()(const SurfaceInteraction3f& hit, const Vec3f& origin, const Vec3f& direction,
+                               float scale) const {
     if (!hit.is_valid()) return 1.f;
-    const uint32_t* i = &hit.shape->mesh.indices[3 * size_t(hit.prim_index)];
-    const float b1 = hit.bary.x, b2 = hit.bary.y, b0 = 1.f - b1 - b2;
-    return b0 * vertex_value(*hit.shape, i[0], origin, direction) +
-           b1 * vertex_value(*hit.shape, i[1], origin, direction) +
-           b2 * vertex_value(*hit.shape, i[2], origin, direction);
+    const Shape& shape = *hit.shape;
+    const uint32_t* i = &shape.mesh.indices[3 * size_t(hit.prim_index)];
+    const float b[3] = {1.f - hit.bary.x - hit.bary.y, hit.bary.x, hit.bary.y};
+    if (!(scale > 0.f)) {
+        float B = 0.f;
+        for (int k = 0; k < 3; ++k)
+            B += b[k] * vertex_value(shape, i[k], origin, direction);
+        return B;
+    }
+    const MeshEdges& m = edges_of(shape);
+    float B = 0.f;
+    for (int k = 0; k < 3; ++k)
+        B += b[k] * normal_value(m, i[k], direction);
+    // The nearest boundary point on the triangle: a silhouette or open edge of it, or a corner on one.
+    float r = Infinity;
+    const Vec3f* p = shape.mesh.positions.data();
+    for (int k = 0; k < 3; ++k) {
+        const uint32_t v = i[k], w = i[(k + 1) % 3];
+        bool edge = false;
+        if (!on_boundary(shape, m, v, w, origin, edge)) continue;
+        r = std::min(r, edge ? angle_to_segment(origin, hit.p, p[v], p[w]) : angle_to_segment(origin, hit.p, p[v], p[v]));
+    }
+    if (r < Infinity) B = std::min(B, float(std::expm1(std::min(0.5 * double(scale) * double(r) * double(r), 80.0))));
+    return B;
 }
 
 } // namespace penumbra

@@ -112,5 +112,6 @@ std::unique_ptr<DerivativeMethod> make_method(const std::string& name, const Met
 MethodInfo interior_method_info();
 MethodInfo psdr_method_info();
 MethodInfo paths_method_info();
+MethodInfo was_method_info();
 
 } // namespace penumbra

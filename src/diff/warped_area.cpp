@@ -1,0 +1,526 @@
+#include "diff/warped_area.h"
+
+#include "core/batch_stats.h"
+#include "core/interrupt.h"
+#include "core/rng.h"
+#include "core/stratified.h"
+#include "diff/auxiliary_rays.h"
+#include "diff/control_variate.h"
+#include "diff/material_form.h"
+#include "render/emitter_hit.h"
+#include "render/light_medium.h"
+#include "render/mis.h"
+#include "render/tiles.h"
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include <chrono>
+
+namespace penumbra {
+
+namespace {
+
+// The auxiliary samples' random numbers: a stream of their own per camera sample, so that the unbiased
+// estimator's random sample counts do not shift the path sampler's dimensions (and a path is the same with
+// and without warping).
+class AuxiliaryRng {
+  public:
+    AuxiliaryRng(uint64_t seed, uint64_t pixel, uint64_t sample)
+        : pcg_(mix_bits(seed ^ mix_bits(pixel * 0x9E3779B97F4A7C15ULL + sample)), mix_bits(seed + pixel)) {}
+    float next_1d() { return pcg_.next_float(); }
+    Vec2f next_2d() {
+        const float a = pcg_.next_float();
+        return {a, pcg_.next_float()};
+    }
+
+  private:
+    PCG32 pcg_;
+};
+
+// What the estimator of one scene shares across samples.
+struct WasContext {
+    const Scene& scene;
+    const Parameters& params;
+    MaterialForm form;
+    BoundaryTest boundary;
+    WarpOptions warp, film_warp; // at surface vertices and at the camera
+    PathSettings settings;
+    float sigma;    // the film auxiliary distribution's standard deviation (pixels): the filter's
+    Vec3f camera;   // the center of projection
+    bool film_edge; // the film's edge cuts the filters (no sample_border): a static discontinuity
+    float film_scale; // the boundary test's distance scale on the film: (pixels per radian)² / σ²
+
+    WasContext(const Scene& s, const Parameters& p, const WasOptions& o)
+        : scene(s), params(p), form(s, p, FirstVertex::Material), boundary(s), warp(o.warp), film_warp(o.warp), settings(o.path),
+          sigma(filter_sigma(*s.sensor->film->rfilter)),
+          camera(s.sensor->to_world.apply_point(Vec3f(0.f))), film_edge(!s.sensor->film->sample_border) {
+        film_warp.jackknife = o.film_jackknife;
+        // Pixels per radian at the film's center.
+        const Film& film = *s.sensor->film;
+        const Vec2f center(0.5f * float(film.width), 0.5f * float(film.height));
+        const Vec3f d0 = s.sensor->sample_ray(center, Vec2f(0.5f)).first.d;
+        const Vec3f d1 = s.sensor->sample_ray(center + Vec2f(1.f, 0.f), Vec2f(0.5f)).first.d;
+        const float radians = 2.f * std::asin(std::min(1.f, 0.5f * norm(d1 - d0)));
+        film_scale = 1.f / (radians * radians * sigma * sigma);
+    }
+
+    // The standard deviation of the normalized 1D filter profile (its second moment, by quadrature).
+    static float filter_sigma(const ReconstructionFilter& f) {
+        constexpr int N = 4096;
+        const double r = f.radius(), h = 2.0 * r / N;
+        double m0 = 0, m2 = 0;
+        for (int i = 0; i < N; ++i) {
+            const double x = -r + (i + 0.5) * h, v = f.eval(float(x));
+            m0 += v;
+            m2 += v * x * x;
+        }
+        return float(std::sqrt(m2 / m0));
+    }
+};
+
+// The material point of `hit` on the moving geometry: the barycentric blend of its triangle's vertices.
+Vec3<Var> material_point(const MaterialForm& form, const SurfaceInteraction3f& hit) {
+    const uint32_t* i = &hit.shape->mesh.indices[3 * size_t(hit.prim_index)];
+    const float b1 = hit.bary.x, b2 = hit.bary.y;
+    return form.position(*hit.shape, i[0]) * Var(1.f - b1 - b2) + form.position(*hit.shape, i[1]) * Var(b1) +
+           form.position(*hit.shape, i[2]) * Var(b2);
+}
+
+// Radiance of the infinite emitters along the warped escaped direction (value d, derivative V).
+Color3<Var> environment(const WasContext& c, const Vec3f& d, const Vec3<Var>& warped) {
+    Color3<Var> L(Var(0.f));
+    for (const auto& e : c.scene.emitters)
+        if (e->is_infinite() && !e->is_delta())
+            L += e->eval_environment(c.form.direction_to_reference_light(*e, d) + (warped - Vec3<Var>(d)));
+    return L;
+}
+
+// The warp of direction ω at the surface vertex `hit` (x(θ) = si.p): Algorithm 2 or 3 with vMF auxiliary
+// rays.
+WarpEstimate warp_at(const WasContext& c, const SurfaceInteraction3f& hit, const SurfaceInteraction<Var>& si,
+                     const Vec3f& omega, AuxiliaryRng& rng, RayCounter& rays) {
+    const WarpEstimate e = estimate_warp_at(c.scene, c.form, c.boundary, WarpVertex{hit, si.p}, omega, c.warp, rng);
+    rays.rays += uint64_t(c.warp.unbiased ? c.warp.rr_batch : c.warp.aux_count);
+    return e;
+}
+
+// Next-event estimation at x in solid angle: f_s(ω(θ)) L_e(y(θ) → x) J / p_σ, with y(θ) where the warped ray
+// meets the moving emitter (area lights) or the environment along ω(θ). Delta lights are connected in material
+// form (the light's position and x as they move; their shadows' motion is not seen, header).
+Color3<Var> next_event(const WasContext& c, const BSDF* bsdf, const SurfaceInteraction3f& hit,
+                       const SurfaceInteraction<Var>& si, const DirectionSample3f& ds, AuxiliaryRng& rng,
+                       RayCounter& rays) {
+    const BSDFContext ctx{TransportMode::Radiance};
+    if (ds.emitter->is_delta()) return next_event_contribution(ctx, bsdf, si, ds, c.form);
+    const WarpEstimate e = warp_at(c, hit, si, ds.d, rng, rays);
+    const Color3<Var> f = bsdf->eval(ctx, si, si.to_local(e.direction)) * (e.jacobian / Var(ds.pdf));
+    if (const Shape* shape = ds.emitter->shape()) {
+        const SurfaceInteraction3f light = surface_interaction<float>(*shape, ds.prim, ds.bary, MeshVertices{shape->mesh});
+        SurfaceInteraction<Var> y = warped_vertex(c.params, light, si.p, e.direction);
+        y.wi = y.to_local(-e.direction);
+        return f * ds.emitter->eval(y);
+    }
+    return f * ds.emitter->eval_environment(c.form.direction_to_reference_light(*ds.emitter, ds.d) +
+                                            (e.direction - Vec3<Var>(ds.d)));
+}
+
+// Radiance leaving the first vertex toward the camera along one path (render/path_tracer.h's sampling, in
+// the reference configuration), each non-delta direction warped (Algorithm 1 lines 3–7).
+Color3<Var> warped_path(const WasContext& c, Sampler& sampler, AuxiliaryRng& rng, const Ray& primary,
+                        const SurfaceInteraction3f& first, const SurfaceInteraction<Var>& first_si,
+                        RayCounter& rays) {
+    const BSDFContext ctx{TransportMode::Radiance};
+    const PathSettings& settings = c.settings;
+    Color3<Var> L(Var(0.f)), throughput(Var(1.f));
+    if (settings.max_depth == 0) return L;
+    const unsigned max_depth = unsigned(settings.max_depth); // -1 wraps to "infinite"
+    float eta = 1.f;
+    Ray ray = primary;
+    SurfaceInteraction3f hit = first, prev_hit;
+    SurfaceInteraction<Var> si = first_si;
+    Vec3<Var> direction(ray.d); // the warped direction that reached `hit`
+    float prev_bsdf_pdf = 1.f;
+    bool prev_bsdf_delta = true;
+
+    for (unsigned depth = 0;; ++depth) {
+        if (!(depth == 0 && settings.hide_emitters))
+            for_each_emitter_hit(c.scene, prev_hit, ray.d, hit, [&](const Emitter* e, const Color3f&, float pdf) {
+                const float w = prev_bsdf_delta ? 1.f : mis_power(prev_bsdf_pdf, pdf);
+                const Color3<Var> Le = hit.is_valid() ? e->eval(si) : environment(c, ray.d, direction);
+                L += throughput * Le * Var(w);
+            });
+        if (!hit.is_valid() || depth + 1 >= max_depth) break;
+        const BSDF* bsdf = hit.bsdf();
+        if (!bsdf) break;
+
+        if (bsdf->has(BSDFSmooth) && !c.scene.emitters.empty()) {
+            const auto [ds, em_weight] = c.scene.sample_emitter_direction(hit, sampler.next_2d(), true);
+            ++rays.rays;
+            if (!is_black(em_weight)) {
+                const float w = ds.delta ? 1.f : mis_power(ds.pdf, bsdf->pdf(ctx, hit, hit.to_local(ds.d)));
+                L += throughput * next_event(c, bsdf, hit, si, ds, rng, rays) * Var(w);
+            }
+        } else {
+            sampler.next_2d(); // keep the sample stream aligned across materials
+        }
+
+        const float u1 = sampler.next_1d();
+        const auto [bs, weight] = bsdf->sample(ctx, hit, u1, sampler.next_2d());
+        if (is_black(weight)) break;
+        const Vec3f d = hit.to_world(bs.wo);
+        ray = hit.spawn_ray(d);
+        ++rays.rays;
+        const SurfaceInteraction3f next = c.scene.intersect(ray);
+        const bool delta = (bs.sampled_type & BSDFDelta) != 0;
+        if (delta) {
+            // No integral over directions at a delta lobe (no derivative flows through it, as the interior term).
+            direction = Vec3<Var>(d);
+            throughput *= Color3<Var>(weight);
+        } else {
+            const WarpEstimate e = warp_at(c, hit, si, d, rng, rays);
+            direction = e.direction;
+            throughput *= bsdf->eval(ctx, si, si.to_local(direction)) * (e.jacobian / Var(bs.pdf));
+        }
+        if (next.is_valid()) {
+            SurfaceInteraction<Var> x = warped_vertex(c.params, next, si.p, direction);
+            x.wi = x.to_local(-direction);
+            si = x;
+        }
+        eta *= bs.eta;
+        prev_hit = hit;
+        prev_bsdf_pdf = bs.pdf;
+        prev_bsdf_delta = delta;
+        hit = next;
+
+        // Russian roulette (render/path_tracer.h), detached.
+        if (depth + 1 >= unsigned(settings.rr_depth)) {
+            const Color3f t(detach(throughput.x), detach(throughput.y), detach(throughput.z));
+            const float q = std::min(max_component(t) * eta * eta, 0.95f);
+            if (sampler.next_1d() >= q) break;
+            throughput /= Var(q);
+        }
+    }
+    return L;
+}
+
+// The film auxiliary sample at position `x` (Algorithm 2 on the film, §3.3): the boundary test of the point
+// seen through x and its film motion ∂θ s(y(θ)) (the direct warp). Beyond a cutting film edge the filters end:
+// a static discontinuity, B = 0 with no motion.
+void film_auxiliary(const WasContext& c, const Vec2f& x, const Vec2f& aperture, PixelAuxiliarySample& a,
+                    RayCounter& rays) {
+    const Sensor& sensor = *c.scene.sensor;
+    const Film& film = *sensor.film;
+    a.warp = Vec2<Var>(x);
+    if (c.film_edge && (x.x < 0.f || x.y < 0.f || x.x > float(film.width) || x.y > float(film.height))) {
+        a.boundary = 0.f;
+        return;
+    }
+    const Ray ray = sensor.sample_ray(x, aperture).first;
+    ++rays.rays;
+    const SurfaceInteraction3f hit = c.scene.intersect(ray);
+    a.boundary = c.boundary(hit, ray.o, ray.d, c.film_scale);
+    // An escaped ray sees a direction: a far point moves on the film only with the camera's rotation.
+    const Vec3<Var> y = hit.is_valid() ? material_point(c.form, hit) : Vec3<Var>(ray.o + ray.d * 1e4f);
+    const Vec3<Var> p = c.form.to_reference_camera(y, c.camera);
+    if (p.x.is_constant() && p.y.is_constant() && p.z.is_constant()) return;
+    Vec2<Var> s;
+    Var jacobian;
+    if (!sensor.film_position(p, Vec3<Var>(ray.d * -1.f), s, jacobian)) return;
+    a.warp = Vec2<Var>(Var(x.x, s.x.id), Var(x.y, s.y.id));
+}
+
+// ∂ω/∂x of the camera ray's direction at film position x (central differences; the direction is smooth).
+std::pair<Vec3f, Vec3f> direction_gradient(const Sensor& sensor, const Vec2f& x, const Vec2f& aperture) {
+    constexpr float h = 1e-2f;
+    const auto d = [&](float dx, float dy) { return sensor.sample_ray(Vec2f(x.x + dx, x.y + dy), aperture).first.d; };
+    return {(d(h, 0.f) - d(-h, 0.f)) * (0.5f / h), (d(0.f, h) - d(0.f, -h)) * (0.5f / h)};
+}
+
+// One camera sample of pixel (px, py): the film position x ~ the filter, warped on the film (value x,
+// derivative V(x)), the camera ray through the warped position, P_j(x(θ)) J / p and the path behind it.
+struct CameraSample {
+    Color3<Var> value;
+    Vec2f offset;       // x − the pixel center
+    Vec2<Var> position; // x(θ)
+};
+
+CameraSample camera_sample(const WasContext& c, Sampler& sampler, AuxiliaryRng& rng, int px, int py,
+                           const PixelStratum& stratum, RayCounter& rays) {
+    const Sensor& sensor = *c.scene.sensor;
+    const Film& film = *sensor.film;
+    const Vec2f x = film.sample_position(px, py, stratum(sampler.next_2d()));
+    const Vec2f aperture = sampler.next_2d();
+    const auto [ray, ray_weight] = sensor.sample_ray(x, aperture);
+    ++rays.rays;
+    CameraSample out{Color3<Var>(Var(0.f)), Vec2f(x.x - (px + 0.5f), x.y - (py + 0.5f)), Vec2<Var>(x)};
+
+    std::vector<PixelAuxiliarySample> aux = sample_pixel_auxiliary(c.sigma, c.film_warp, rng);
+    for (PixelAuxiliarySample& a : aux)
+        film_auxiliary(c, x + a.offset, aperture, a, rays);
+    const PixelWarpEstimate e = estimate_pixel_warp(x, aux, c.sigma, c.film_warp);
+    out.position = e.position;
+
+    const Var P = film.filter_weight(px, py, e.position);
+    if (!(P.v > 0.f)) return out;
+    const Var weight = P / Var(P.v) * e.jacobian * Var(ray_weight.x);
+    const auto [dx, dy] = direction_gradient(sensor, x, aperture);
+    const Vec3<Var> moved = Vec3<Var>(ray.d) + Vec3<Var>(dx) * (e.position.x - Var(x.x)) +
+                            Vec3<Var>(dy) * (e.position.y - Var(x.y));
+    const Vec3<Var> direction = c.form.direction_from_reference_camera(moved);
+    const SurfaceInteraction3f first = c.scene.intersect(ray);
+    if (!first.is_valid()) {
+        if (!c.settings.hide_emitters) out.value = environment(c, ray.d, direction) * weight;
+        return out;
+    }
+    SurfaceInteraction<Var> x1 = warped_vertex(c.params, first, c.form.camera_position(ray.o), direction);
+    x1.wi = x1.to_local(-direction);
+    out.value = warped_path(c, sampler, rng, ray, first, x1, rays) * weight;
+    return out;
+}
+
+bool finite(const Color3<Var>& v) { return std::isfinite(v.x.v) && std::isfinite(v.y.v) && std::isfinite(v.z.v); }
+float tangent_of(const Var& v, const std::vector<float>& tangent) { return v.id < 0 ? 0.f : tangent[v.id]; }
+
+// The linear model of Appendix D fitted to a pixel's previous samples: least squares of y ≈ μ_y + ∇y · x for
+// the radiance g (per channel) and the warp V, x the offset from the pixel center.
+class PixelLinearModel {
+  public:
+    void add(const Vec2f& x, const Color3f& g, const Vec2f& v) {
+        const double row[3] = {1.0, x.x, x.y}, y[5] = {g.x, g.y, g.z, v.x, v.y};
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j) xtx_[i][j] += row[i] * row[j];
+            for (int k = 0; k < 5; ++k) xty_[i][k] += row[i] * y[k];
+        }
+        ++n_;
+    }
+    // The control variate of channel `ch` fitted so far; false until enough samples.
+    bool fit(int ch, LinearControlVariate& cv) const {
+        if (n_ < 6) return false;
+        double coef[3][5];
+        if (!solve(coef)) return false;
+        cv.mu_g = float(coef[0][ch]);
+        cv.grad_g = Vec2f(float(coef[1][ch]), float(coef[2][ch]));
+        cv.mu_v = Vec2f(float(coef[0][3]), float(coef[0][4]));
+        cv.jac_v[0] = Vec2f(float(coef[1][3]), float(coef[2][3]));
+        cv.jac_v[1] = Vec2f(float(coef[1][4]), float(coef[2][4]));
+        return true;
+    }
+
+  private:
+    // XᵀX β = Xᵀy by Gaussian elimination with partial pivoting (3 × 3, 5 right-hand sides).
+    bool solve(double (&beta)[3][5]) const {
+        double a[3][8];
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j) a[i][j] = xtx_[i][j];
+            for (int k = 0; k < 5; ++k) a[i][3 + k] = xty_[i][k];
+        }
+        for (int col = 0; col < 3; ++col) {
+            int pivot = col;
+            for (int r = col + 1; r < 3; ++r)
+                if (std::abs(a[r][col]) > std::abs(a[pivot][col])) pivot = r;
+            if (!(std::abs(a[pivot][col]) > 1e-9 * n_)) return false;
+            std::swap(a[col], a[pivot]);
+            for (int r = 0; r < 3; ++r) {
+                if (r == col) continue;
+                const double f = a[r][col] / a[col][col];
+                for (int j = col; j < 8; ++j) a[r][j] -= f * a[col][j];
+            }
+        }
+        for (int i = 0; i < 3; ++i)
+            for (int k = 0; k < 5; ++k) beta[i][k] = a[i][3 + k] / a[i][i];
+        return true;
+    }
+
+    double xtx_[3][3] = {}, xty_[3][5] = {};
+    int n_ = 0;
+};
+
+// The score ∇ log P_j of the film sampling density at offset x (central differences of the separable
+// profile): the control variate's ∂x k / k, whose mean is zero and E[x sᵀ] = −I for any continuous filter.
+Vec2f filter_score(const ReconstructionFilter& f, const Vec2f& x) {
+    constexpr float h = 1e-3f;
+    const auto s = [&](float t) {
+        const float v = f.eval(t);
+        return v > 0.f ? (f.eval(t + h) - f.eval(t - h)) / (2.f * h * v) : 0.f;
+    };
+    return {s(x.x), s(x.y)};
+}
+
+// Q − M = −(C(x) − E[C]) (Appendix D) for one channel; the paper's C with the filter's own score:
+// C = ⟨s(x), μ_g μ_V + A x⟩, E[C] = −tr(A).
+float control_correction(const LinearControlVariate& cv, const Vec2f& x, const Vec2f& score) {
+    const Vec2f b = cv.mu_v * cv.mu_g;
+    const Vec2f ax(LinearControlVariate::dot2(cv.row(0), x), LinearControlVariate::dot2(cv.row(1), x));
+    const float C = LinearControlVariate::dot2(score, b + ax);
+    return -(C - cv.mean());
+}
+
+struct PixelSums {
+    Image primal, derivative;
+};
+
+// One batch of the forward-mode estimator. The control variate of each pixel is the linear model fitted to the
+// previous batch (`models`, replaced by this batch's fit): fixed within the batch, so that its known mean
+// holds for the stratified film positions (a model refitted after every sample correlates with the strata
+// that remain and biases the estimate).
+PixelSums forward_batch(const WasContext& c, const WasOptions& options, uint64_t seed,
+                        std::vector<PixelLinearModel>& models, const std::function<void(float)>& progress,
+                        SharedSampleCost& cost) {
+    const Film& film = *c.scene.sensor->film;
+    PixelSums out{Image(film.width, film.height), Image(film.width, film.height)};
+    const float r = film.rfilter->radius();
+    for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
+        Sampler sampler(*c.scene.sensor->sampler, options.spp);
+        RayCounter rays;
+        uint64_t tape_nodes = 0;
+        std::vector<float> tangent;
+        Tape& tape = Tape::current();
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                check_interrupt();
+                const uint64_t pixel = uint64_t(y) * film.width + x;
+                // The control variate needs the sampling density's score to integrate to zero: pixels whose
+                // filter the film's edge cuts are left without it.
+                const bool control = options.control_variate &&
+                                     (!c.film_edge || (x + 0.5f >= r && y + 0.5f >= r &&
+                                                       film.width - x - 0.5f >= r && film.height - y - 0.5f >= r));
+                PixelLinearModel& model = models[pixel];
+                PixelLinearModel fitted;
+                LinearControlVariate cv[3];
+                bool fit[3] = {false, false, false};
+                for (int ch = 0; ch < 3 && control; ++ch)
+                    fit[ch] = model.fit(ch, cv[ch]);
+                Vec3d primal(0.0), derivative(0.0);
+                for (int m = 0; m < options.spp; ++m) {
+                    sampler.start(seed, pixel, uint64_t(m));
+                    AuxiliaryRng rng(seed, pixel, uint64_t(m));
+                    tape.clear();
+                    const CameraSample s = camera_sample(c, sampler, rng, x, y, PixelStratum(m, options.spp, seed, pixel), rays);
+                    tape_nodes += tape.size();
+                    if (!finite(s.value)) continue;
+                    tape.forward(c.params.direction().data(), tangent);
+                    const Color3f g(s.value.x.v, s.value.y.v, s.value.z.v);
+                    Vec3d d(tangent_of(s.value.x, tangent), tangent_of(s.value.y, tangent),
+                            tangent_of(s.value.z, tangent));
+                    if (control) {
+                        const Vec2f v(tangent_of(s.position.x, tangent), tangent_of(s.position.y, tangent));
+                        const Vec2f score = filter_score(*film.rfilter, s.offset);
+                        for (int ch = 0; ch < 3; ++ch)
+                            if (fit[ch]) d[ch] += control_correction(cv[ch], s.offset, score);
+                        if (std::isfinite(v.x) && std::isfinite(v.y)) fitted.add(s.offset, g, v);
+                    }
+                    primal += Vec3d(g.x, g.y, g.z);
+                    if (is_finite(Vec3f(d))) derivative += d;
+                }
+                model = fitted;
+                out.primal.at(x, y) = Color3f(primal / double(options.spp));
+                out.derivative.at(x, y) = Color3f(derivative / double(options.spp));
+            }
+        tape.clear();
+        cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays.rays, tape_nodes});
+    }, progress);
+    return out;
+}
+
+} // namespace
+
+void require_was_support(const Scene& scene, const Parameters& params) {
+    if (params.dimension() == 0) throw Error("no parameter is enabled for differentiation");
+    if (!scene.sensor || !scene.sensor->film) throw Error("the scene has no sensor");
+    if (scene_has_media(scene))
+        throw Error("method was (paper 004) differentiates surfaces only and the scene has participating media: "
+                    "use the psdr method (the default)");
+    if (!scene.sensor->projects_points())
+        throw Error("method was warps the film: it needs a sensor with one center of projection (perspective, "
+                    "orthographic, thinlens with aperture 0)");
+    const ReconstructionFilter& f = *scene.sensor->film->rfilter;
+    if (f.eval(0.999f * f.radius()) > 0.05f * f.eval(0.f))
+        throw Error("method was needs a reconstruction filter that falls continuously to zero (its film warp "
+                    "would move the jumps of '" + f.to_string() + "' at pixel edges): use <rfilter type=\"gaussian\"/> "
+                    "(Mitsuba's default) or tent, or the psdr method");
+}
+
+DerivativeImage was_derivative(const Scene& scene, const Parameters& params, const WasOptions& options) {
+    require_was_support(scene, params);
+    if (options.spp <= 0 || options.batches <= 0) throw Error("derivative: spp and batches must be positive");
+    const auto start = std::chrono::steady_clock::now();
+    const WasContext c(scene, params, options);
+    const int B = options.batches;
+    ImageBatches primal, derivative;
+    SharedSampleCost cost;
+    std::vector<PixelLinearModel> models(size_t(scene.sensor->film->width) * size_t(scene.sensor->film->height));
+    for (int b = 0; b < B; ++b) {
+        auto progress = options.progress
+                            ? std::function<void(float)>([&, b](float f) { options.progress((b + f) / B); })
+                            : std::function<void(float)>();
+        const PixelSums s =
+            forward_batch(c, options, options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b), models, progress, cost);
+        primal.add(s.primal);
+        derivative.add(s.derivative);
+    }
+    DerivativeImage result{primal.mean(), derivative.mean(), derivative.standard_error(), 0.0, cost.get()};
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+}
+
+Gradient was_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                      const WasOptions& options) {
+    require_was_support(scene, params);
+    const Film& film = *scene.sensor->film;
+    if (adjoint.width != film.width || adjoint.height != film.height)
+        throw Error("gradient: the adjoint image is " + std::to_string(adjoint.width) + "x" +
+                    std::to_string(adjoint.height) + ", the film " + std::to_string(film.width) + "x" +
+                    std::to_string(film.height));
+    if (options.spp <= 0) throw Error("gradient: spp must be positive");
+    const auto start = std::chrono::steady_clock::now();
+    const WasContext c(scene, params, options);
+    const size_t dim = size_t(params.dimension());
+    tbb::enumerable_thread_specific<std::vector<double>> gradients([dim] { return std::vector<double>(dim, 0.0); });
+    Gradient result{std::vector<double>(dim, 0.0), {}, Image(film.width, film.height), 0.0, {}};
+    for (const auto& e : scene.emitters)
+        if (e->is_delta() && !e->is_infinite()) {
+            result.warnings.push_back("method was does not see the motion of shadows cast from point and spot lights");
+            break;
+        }
+    const float inv_spp = 1.f / float(options.spp);
+    SharedSampleCost cost;
+    for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
+        Sampler sampler(*scene.sensor->sampler, options.spp);
+        RayCounter rays;
+        uint64_t tape_nodes = 0;
+        std::vector<float> scratch;
+        std::vector<std::pair<int32_t, float>> seeds(3);
+        std::vector<double>& gradient = gradients.local();
+        Tape& tape = Tape::current();
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                check_interrupt();
+                const uint64_t pixel = uint64_t(y) * film.width + x;
+                const Color3f a = adjoint.at(x, y) * inv_spp;
+                Vec3d primal(0.0);
+                for (int m = 0; m < options.spp; ++m) {
+                    sampler.start(options.seed, pixel, uint64_t(m));
+                    AuxiliaryRng rng(options.seed, pixel, uint64_t(m));
+                    tape.clear();
+                    const CameraSample s = camera_sample(c, sampler, rng, x, y, PixelStratum(m, options.spp, options.seed, pixel), rays);
+                    tape_nodes += tape.size();
+                    if (!finite(s.value)) continue;
+                    primal += Vec3d(s.value.x.v, s.value.y.v, s.value.z.v);
+                    seeds[0] = {s.value.x.id, a.x};
+                    seeds[1] = {s.value.y.id, a.y};
+                    seeds[2] = {s.value.z.id, a.z};
+                    tape.backward(seeds, gradient.data(), scratch);
+                }
+                result.primal.at(x, y) = Color3f(primal / double(options.spp));
+            }
+        tape.clear();
+        cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays.rays, tape_nodes});
+    }, options.progress);
+    result.cost = cost.get();
+    for (const std::vector<double>& g : gradients)
+        for (size_t k = 0; k < dim; ++k) result.values[k] += g[k];
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+}
+
+} // namespace penumbra

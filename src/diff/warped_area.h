@@ -1,0 +1,47 @@
+// Warped-area sampling (paper 004, Algorithm 1): the total derivative of the image, interior and boundary
+// together, from an ordinary path tracer. Every integral along a path is written over directions (solid angle
+// at surface vertices, the film at the camera) and differentiated as
+//   ∂θ ∫ f dω = ∫ ∂θ f + ∇·(f V) dω  (Eq. 5)
+// with a warp field V that is continuous and equals the velocity of the discontinuities of f at them (Eq. 7,
+// estimated from auxiliary rays: diff/warp_field.h, diff/auxiliary_rays.h). A sampled direction ω becomes
+// ω(θ) = ω + (θ − θ0) V(ω) and the contribution is multiplied by the divergence Jacobian 1 + (θ − θ0) ∇·V, so
+// the tape's derivative of the path contribution is the estimator of Eq. 5 at every vertex at once.
+//   camera    the film position x is sampled from the reconstruction filter; the auxiliary positions are
+//             N(x, σ² I) on the film with σ the filter's standard deviation (§3.3); the filter's gradient
+//             term is controlled by the linear control variate of Appendix D (forward mode);
+//   surfaces  the BSDF-sampled direction and the emitter-sampled direction (NEE) are warped with vMF
+//             auxiliary rays (κ, N'); the next vertex is where the warped ray meets the moving triangle;
+//   delta     specular vertices and delta lights are not warped (no integral to warp): shadows of point,
+//             spot and directional lights are discontinuities that no boundary test at the previous vertex
+//             sees, and their motion is missed (paper 004 uses area and vMF lights).
+// Surfaces only (no participating media); a continuous reconstruction filter is required (the box filter's
+// jumps at pixel edges are static discontinuities the film warp would move).
+#pragma once
+#include "diff/interior.h"
+#include "diff/warp_field.h"
+
+namespace penumbra {
+
+struct WasOptions {
+    WarpOptions warp;            // κ, N', antithetic, unbiased, jackknife at surface vertices (diff/warp_field.h)
+    bool film_jackknife = true;  // the jackknife at the camera vertex (measured: removes the film warp's bias)
+    bool control_variate = true; // Appendix D at the camera vertex (forward mode)
+    int spp = 16;                // samples per pixel (per batch)
+    int batches = 1;
+    uint64_t seed = 0;
+    int threads = 0;
+    PathSettings path;
+    std::function<void(float)> progress;
+};
+
+// Throws a clear Error for what the method cannot differentiate (media, a box filter, no geometry moving and
+// nothing else to do is fine).
+void require_was_support(const Scene& scene, const Parameters& params);
+
+// Forward mode: dI/dθ along params.direction() (with per-pixel standard errors over the batches).
+DerivativeImage was_derivative(const Scene& scene, const Parameters& params, const WasOptions& options);
+// Reverse mode: dL/dθ = Σ_pixels adjoint · dI/dθ for every enabled parameter scalar (no control variate).
+Gradient was_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                      const WasOptions& options);
+
+} // namespace penumbra

@@ -1,0 +1,99 @@
+// The method `was`: warped-area sampling of paper 004 (diff/warped_area.h) behind the common front of
+// diff/method.h. One term: the whole derivative (interior and boundary together).
+#include "diff/method.h"
+#include "diff/warped_area.h"
+
+#include <cmath>
+
+namespace penumbra {
+
+namespace {
+
+class WasMethod final : public DerivativeMethod {
+  public:
+    explicit WasMethod(const MethodOptions& o) {
+        base_.warp.unbiased = o.get_bool("was-unbiased", false);
+        base_.warp.aux_count = o.get_int("was-aux", base_.warp.aux_count);
+        base_.warp.weight.kappa = float(o.get_float("was-kappa", base_.warp.weight.kappa));
+        base_.warp.antithetic = !o.get_bool("no-antithetic", false);
+        base_.control_variate = !o.get_bool("no-control-variate", false);
+        const std::string jackknife = o.get_string("was-jackknife", "film");
+        base_.film_jackknife = jackknife != "none";
+        base_.warp.jackknife = jackknife == "all";
+        char kappa[32];
+        std::snprintf(kappa, sizeof(kappa), "%g", double(base_.warp.weight.kappa));
+        name_ = std::string(base_.warp.unbiased ? "unbiased" : "consistent") + " warped-area sampling, " +
+                (base_.warp.unbiased ? "N' ~ Geom" : "N' = " + std::to_string(base_.warp.aux_count)) +
+                ", kappa = " + kappa + (base_.warp.antithetic ? ", antithetic" : "") +
+                (base_.control_variate ? ", control variate" : "") +
+                (base_.warp.unbiased ? "" : ", jackknife: " + jackknife);
+    }
+
+    MethodDerivative derivative(const Scene& scene, const Parameters& params, const MethodRun& run) override {
+        const DerivativeImage d = was_derivative(scene, params, options(scene, run, run.batches));
+        MethodDerivative out;
+        out.derivative = d.derivative;
+        out.stderr_img = d.stderr_img;
+        out.terms.push_back({"warped-area", d.derivative, d.stderr_img});
+        out.description = name_;
+        out.seconds = d.seconds;
+        return out;
+    }
+
+    MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                            const MethodRun& run) override {
+        const Gradient g = was_gradient(scene, params, adjoint, options(scene, run, 1));
+        MethodGradient out;
+        out.values = g.values;
+        out.primal = g.primal;
+        out.warnings = g.warnings;
+        out.description = name_;
+        out.seconds = g.seconds;
+        return out;
+    }
+
+  private:
+    WasOptions options(const Scene& scene, const MethodRun& run, int batches) const {
+        WasOptions o = base_;
+        o.batches = batches;
+        o.spp = std::max(1, run.spp / batches);
+        o.seed = run.seed;
+        o.threads = run.threads;
+        o.path = path_settings(scene);
+        o.progress = run.progress;
+        return o;
+    }
+
+    WasOptions base_;
+    std::string name_;
+};
+
+} // namespace
+
+MethodInfo was_method_info() {
+    using Type = MethodOption::Type;
+    return {"was",
+            "warped-area sampling of paper 004: boundary derivatives from auxiliary rays at every path vertex, "
+            "no edge sampling (surfaces, continuous pixel filters)",
+            {{"was-unbiased",
+              Type::Bool,
+              "Russian-roulette debiasing of the warp's normalization (Algorithm 3) instead of a fixed N'",
+              {}},
+             {"was-aux", Type::Int, "auxiliary rays per warped direction N' (default 8)", {}, 2, 4096},
+             {"was-kappa",
+              Type::Float,
+              "concentration of the vMF auxiliary rays and of the harmonic weights' distance (default 1e4)",
+              {},
+              1.0,
+              1e8},
+             {"no-antithetic", Type::Bool, "independent auxiliary samples instead of antithetic pairs", {}},
+             {"no-control-variate", Type::Bool, "no control variate for the pixel filter's gradient term", {}},
+             {"was-jackknife",
+              Type::String,
+              "leave-one-out jackknife of the consistent warp estimate: at the camera vertex (film, default), "
+              "at every vertex (all) or none (Algorithm 2 as published)",
+              {"film", "all", "none"}}},
+            [](const MethodOptions& o) { return std::make_unique<WasMethod>(o); }};
+}
+
+} // namespace penumbra
