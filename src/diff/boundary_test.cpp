@@ -2,26 +2,35 @@
 
 #include "core/error.h"
 
-#include <map>
+#include <algorithm>
+#include <numeric>
 #include <tuple>
 
 namespace penumbra {
 
 namespace {
 
+// One id per distinct position, the smallest vertex index that has it (sorting by position: a map of 440k
+// vertices costs more than the implicit-edge search of the hedge).
 std::vector<uint32_t> canonical_ids(const TriangleMesh& mesh) {
-    std::map<std::tuple<float, float, float>, uint32_t> ids;
-    std::vector<uint32_t> id(mesh.positions.size());
-    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+    const auto position = [&](uint32_t v) {
         const Vec3f& p = mesh.positions[v];
-        id[v] = ids.try_emplace({p.x, p.y, p.z}, uint32_t(v)).first->second;
-    }
+        return std::tuple(p.x, p.y, p.z);
+    };
+    std::vector<uint32_t> order(mesh.positions.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::sort(order.begin(), order.end(),
+              [&](uint32_t a, uint32_t b) { return std::pair(position(a), a) < std::pair(position(b), b); });
+    std::vector<uint32_t> id(mesh.positions.size());
+    for (size_t k = 0; k < order.size(); ++k)
+        id[order[k]] = k > 0 && position(order[k]) == position(order[k - 1]) ? id[order[k - 1]] : order[k];
     return id;
 }
 
 } // namespace
 
-BoundaryTest::BoundaryTest(const Scene& scene, float spread) : spread_(spread) {
+BoundaryTest::BoundaryTest(const Scene& scene, float spread, bool implicit_edges) : spread_(spread) {
+    if (implicit_edges) implicit_ = std::make_unique<ImplicitEdges>(scene);
     for (const auto& shape : scene.shapes) {
         const TriangleMesh& mesh = shape->mesh;
         MeshEdges m;
@@ -73,14 +82,21 @@ float BoundaryTest::vertex_value(const Shape& shape, uint32_t v, const Vec3f& or
     return (1.f - sin2) / (1.f - (1.f - spread_) * sin2);
 }
 
+float BoundaryTest::implicit_edge_factor(const SurfaceInteraction3f& hit, const Vec3f& origin,
+                                         const Vec3f& direction) const {
+    if (!implicit_) return 1.f;
+    return spread_map(implicit_->nearest(hit, origin, direction).sine);
+}
+
 float BoundaryTest::operator()(const SurfaceInteraction3f& hit, const Vec3f& origin,
                                const Vec3f& direction) const {
     if (!hit.is_valid()) return 1.f;
     const uint32_t* i = &hit.shape->mesh.indices[3 * size_t(hit.prim_index)];
     const float b1 = hit.bary.x, b2 = hit.bary.y, b0 = 1.f - b1 - b2;
-    return b0 * vertex_value(*hit.shape, i[0], origin, direction) +
-           b1 * vertex_value(*hit.shape, i[1], origin, direction) +
-           b2 * vertex_value(*hit.shape, i[2], origin, direction);
+    return (b0 * vertex_value(*hit.shape, i[0], origin, direction) +
+            b1 * vertex_value(*hit.shape, i[1], origin, direction) +
+            b2 * vertex_value(*hit.shape, i[2], origin, direction)) *
+           implicit_edge_factor(hit, origin, direction);
 }
 
 } // namespace penumbra
