@@ -2,6 +2,19 @@
 
 namespace penumbra {
 
+Vec3<Var> auxiliary_point(const MaterialForm& form, const BoundaryTest& boundary, const SurfaceInteraction3f& hit,
+                          const Vec3f& origin, const Vec3f& direction) {
+    // y(θ) = X(p, θ) at the hit's material point: the barycentric blend of its moving triangle's vertices.
+    const uint32_t* i = &hit.shape->mesh.indices[3 * size_t(hit.prim_index)];
+    const float b1 = hit.bary.x, b2 = hit.bary.y;
+    const Vec3<Var> y = form.position(*hit.shape, i[0]) * Var(1.f - b1 - b2) +
+                        form.position(*hit.shape, i[1]) * Var(b1) + form.position(*hit.shape, i[2]) * Var(b2);
+    if (!boundary.implicit_edges()) return y;
+    const NearestSegment nearest = boundary.implicit_edges()->nearest(hit, origin, direction);
+    if (!nearest.segment) return y;
+    return edge_following_point(form, hit, nearest, y, boundary.implicit_edge_factor(hit, origin, direction));
+}
+
 AuxiliarySample trace_auxiliary(const Scene& scene, const MaterialForm& form, const BoundaryTest& boundary,
                                 const WarpVertex& x, const VmfSample& s, float scale) {
     AuxiliarySample a;
@@ -12,12 +25,7 @@ AuxiliarySample trace_auxiliary(const Scene& scene, const MaterialForm& form, co
         a.warp = Vec3<Var>(s.direction); // an escaped ray's direction does not move with the geometry
         return a;
     }
-    // y(θ) = X(p, θ) at the hit's material point: the barycentric blend of its moving triangle's vertices.
-    const uint32_t* i = &hit.shape->mesh.indices[3 * size_t(hit.prim_index)];
-    const float b1 = hit.bary.x, b2 = hit.bary.y;
-    const Vec3<Var> y = form.position(*hit.shape, i[0]) * Var(1.f - b1 - b2) +
-                        form.position(*hit.shape, i[1]) * Var(b1) + form.position(*hit.shape, i[2]) * Var(b2);
-    const Vec3<Var> d = y - x.position;
+    const Vec3<Var> d = auxiliary_point(form, boundary, hit, x.reference.p, s.direction) - x.position;
     a.warp = d / norm(d);
     return a;
 }

@@ -16,6 +16,11 @@ struct WarpVertex {
     Vec3<Var> position;      // x(θ); constant when the vertex does not move
 };
 
+// The point an auxiliary ray's hit follows as θ moves, for its direct warp: the material point X(p, θ), or next
+// to an implicit edge inside its triangle the edge's own moving point (edge_following_point, implicit_edges.h).
+Vec3<Var> auxiliary_point(const MaterialForm& form, const BoundaryTest& boundary, const SurfaceInteraction3f& hit,
+                          const Vec3f& origin, const Vec3f& direction);
+
 // Traces one auxiliary direction (Algorithm 2 lines 4–8); `scale` is the boundary test's distance scale
 // (diff/boundary_test.h; κ in the estimators, 0 for the paper's vertex rule).
 AuxiliarySample trace_auxiliary(const Scene& scene, const MaterialForm& form, const BoundaryTest& boundary,

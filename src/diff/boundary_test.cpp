@@ -2,26 +2,35 @@
 
 #include "core/error.h"
 
-#include <map>
+#include <algorithm>
+#include <numeric>
 #include <tuple>
 
 namespace penumbra {
 
 namespace {
 
+// One id per distinct position, the smallest vertex index that has it (sorting by position: a map of 440k
+// vertices costs more than the implicit-edge search of the hedge).
 std::vector<uint32_t> canonical_ids(const TriangleMesh& mesh) {
-    std::map<std::tuple<float, float, float>, uint32_t> ids;
-    std::vector<uint32_t> id(mesh.positions.size());
-    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+    const auto position = [&](uint32_t v) {
         const Vec3f& p = mesh.positions[v];
-        id[v] = ids.try_emplace({p.x, p.y, p.z}, uint32_t(v)).first->second;
-    }
+        return std::tuple(p.x, p.y, p.z);
+    };
+    std::vector<uint32_t> order(mesh.positions.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::sort(order.begin(), order.end(),
+              [&](uint32_t a, uint32_t b) { return std::pair(position(a), a) < std::pair(position(b), b); });
+    std::vector<uint32_t> id(mesh.positions.size());
+    for (size_t k = 0; k < order.size(); ++k)
+        id[order[k]] = k > 0 && position(order[k]) == position(order[k - 1]) ? id[order[k - 1]] : order[k];
     return id;
 }
 
 } // namespace
 
-BoundaryTest::BoundaryTest(const Scene& scene, float spread) : spread_(spread) {
+BoundaryTest::BoundaryTest(const Scene& scene, float spread, bool implicit_edges) : spread_(spread) {
+    if (implicit_edges) implicit_ = std::make_unique<ImplicitEdges>(scene);
     for (const auto& shape : scene.shapes) {
         const TriangleMesh& mesh = shape->mesh;
         MeshEdges m;
@@ -101,6 +110,12 @@ float angle_to_segment(const Vec3f& o, const Vec3f& p, const Vec3f& a, const Vec
 
 } // namespace
 
+float BoundaryTest::implicit_edge_factor(const SurfaceInteraction3f& hit, const Vec3f& origin,
+                                         const Vec3f& direction) const {
+    if (!implicit_) return 1.f;
+    return spread_map(implicit_->nearest(hit, origin, direction).sine);
+}
+
 float BoundaryTest::operator()(const SurfaceInteraction3f& hit, const Vec3f& origin, const Vec3f& direction,
                                float scale) const {
     if (!hit.is_valid()) return 1.f;
@@ -111,7 +126,7 @@ float BoundaryTest::operator()(const SurfaceInteraction3f& hit, const Vec3f& ori
         float B = 0.f;
         for (int k = 0; k < 3; ++k)
             B += b[k] * vertex_value(shape, i[k], origin, direction);
-        return B;
+        return B * implicit_edge_factor(hit, origin, direction);
     }
     const MeshEdges& m = edges_of(shape);
     float B = 0.f;
@@ -125,6 +140,11 @@ float BoundaryTest::operator()(const SurfaceInteraction3f& hit, const Vec3f& ori
         bool edge = false;
         if (!on_boundary(shape, m, v, w, origin, edge)) continue;
         r = std::min(r, edge ? angle_to_segment(origin, hit.p, p[v], p[w]) : angle_to_segment(origin, hit.p, p[v], p[v]));
+    }
+    // An implicit edge inside the triangle (u: the sine of the angle to it).
+    if (implicit_) {
+        const NearestSegment nearest = implicit_->nearest(hit, origin, direction);
+        if (nearest.segment) r = std::min(r, std::asin(std::min(1.f, nearest.sine)));
     }
     if (r < Infinity) B = std::min(B, float(std::expm1(std::min(0.5 * double(scale) * double(r) * double(r), 80.0))));
     return B;

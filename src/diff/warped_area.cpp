@@ -78,14 +78,6 @@ struct WasContext {
     }
 };
 
-// The material point of `hit` on the moving geometry: the barycentric blend of its triangle's vertices.
-Vec3<Var> material_point(const MaterialForm& form, const SurfaceInteraction3f& hit) {
-    const uint32_t* i = &hit.shape->mesh.indices[3 * size_t(hit.prim_index)];
-    const float b1 = hit.bary.x, b2 = hit.bary.y;
-    return form.position(*hit.shape, i[0]) * Var(1.f - b1 - b2) + form.position(*hit.shape, i[1]) * Var(b1) +
-           form.position(*hit.shape, i[2]) * Var(b2);
-}
-
 // Radiance of the infinite emitters along the warped escaped direction (value d, derivative V).
 Color3<Var> environment(const WasContext& c, const Vec3f& d, const Vec3<Var>& warped) {
     Color3<Var> L(Var(0.f));
@@ -220,7 +212,8 @@ void film_auxiliary(const WasContext& c, const Vec2f& x, const Vec2f& aperture, 
     const SurfaceInteraction3f hit = c.scene.intersect(ray);
     a.boundary = c.boundary(hit, ray.o, ray.d, c.film_scale);
     // An escaped ray sees a direction: a far point moves on the film only with the camera's rotation.
-    const Vec3<Var> y = hit.is_valid() ? material_point(c.form, hit) : Vec3<Var>(ray.o + ray.d * 1e4f);
+    const Vec3<Var> y =
+        hit.is_valid() ? auxiliary_point(c.form, c.boundary, hit, ray.o, ray.d) : Vec3<Var>(ray.o + ray.d * 1e4f);
     const Vec3<Var> p = c.form.to_reference_camera(y, c.camera);
     if (p.x.is_constant() && p.y.is_constant() && p.z.is_constant()) return;
     Vec2<Var> s;
