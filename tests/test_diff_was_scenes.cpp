@@ -5,7 +5,7 @@
 // resolution, against the references that `penumbra ad-suite --fd-only` stored in scenes/was/fd (or, when a
 // scene changed since, computed here at the same settings: slow; regenerate the cache as suite.json says).
 // Tolerances come from standard errors (tests/diff_check.h: z of the image mean, relerr and relerr4 against
-// their noise expectations, 4σ outliers of 2 × 2 blocks). Every parameter moves geometry, so the interior
+// their noise expectations, 4σ outliers of 2 × 2 blocks). Every parameter moves geometry, so psdr's interior
 // term alone (the method's first term) must fail the same check: the boundary contribution carries visible
 // signal.
 #include "diff/ad_suite.h"
@@ -46,6 +46,7 @@ struct MethodCase {
 const std::vector<MethodCase> methods = {
     {"psdr", "psdr", {}},
     {"psdr_material", "psdr", {{"first-vertex", "material"}}},
+    {"was", "was", {}},
 };
 
 std::vector<std::string> method_labels() {
@@ -85,7 +86,12 @@ class WasScene : public testing::TestWithParam<std::tuple<std::string, std::stri
 // spp: relerr4 0.20 against a noise expectation of 0.04, z ≈ −8, against references at 0.05 and 0.025 rad
 // that agree; translating the corkscrew, z ≈ +6); the material form agrees (relerr4 0.083, noise 0.057,
 // z 1.3).
+// was on hedge: the consistent estimate (N' = 32) is half the reference (256 spp: mean −0.058 against
+// −0.123, z +7.6) and takes 175 s at 32 × 32 on two cores (auxiliary rays at every vertex among 220k
+// triangles): measured in the study (docs/warped-area-sampling.md), not in CI.
 const char* open_problem(const std::string& label, const std::string& scene) {
+    if (label == "was" && scene == "hedge")
+        return "the consistent warped-area estimate is biased on the hedge at N' = 32, and slow at test budgets";
     if (label.rfind("psdr", 0) == 0 && scene == "hedge")
         return "edge sampling's indirect term is fireflies on the hedge's glossy reflection at test budgets";
     if (label == "psdr" && scene == "corkscrew")
@@ -120,7 +126,9 @@ TEST_P(WasScene, MatchesFiniteDifferences) {
                : suite_reference(*c.scene, *c.params, ref.eps, ref.spp, ReferenceSeed + 1000 * seed, 0);
 
     MethodRun run;
-    run.spp = s.spp;
+    // was at 4 × the budget: its batches of 16 samples understate its heavy-tailed standard errors (4σ
+    // outliers in 4% of the cube's blocks at 256 spp).
+    run.spp = method->name == "was" ? 4 * s.spp : s.spp;
     run.batches = DerivativeBatches;
     run.seed = 1 + 1000 * seed;
     MethodOptions options;
@@ -128,19 +136,20 @@ TEST_P(WasScene, MatchesFiniteDifferences) {
         options.set(key, value);
     const MethodDerivative d = make_method(method->name, options)->derivative(*c.scene, *c.params, run);
     ASSERT_FALSE(d.terms.empty());
-    ASSERT_EQ(d.terms[0].name, "interior");
     const DiffCheck total = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
-    const DiffCheck interior =
-        check_against(d.terms[0].value, d.terms[0].stderr_img, fd.derivative, fd.stderr_img);
     std::printf("  %s at %dx%d, %s %d spp (%.2f s, %s), reference h = %g at %d spp per side (%.0f s%s)\n"
-                "  %s: %s\n  interior only: %s\n",
-                s.name.c_str(), s.ci_res, s.ci_res, label.c_str(), s.spp, d.seconds, d.description.c_str(),
-                ref.eps, ref.spp, fd.seconds, stored ? ", stored" : "", label.c_str(),
-                describe(total).c_str(), describe(interior).c_str());
-
+                "  %s: %s\n",
+                s.name.c_str(), s.ci_res, s.ci_res, label.c_str(), run.spp, d.seconds, d.description.c_str(),
+                ref.eps, ref.spp, fd.seconds, stored ? ", stored" : "", label.c_str(), describe(total).c_str());
     EXPECT_TRUE(total.passes()) << describe(total);
-    EXPECT_FALSE(interior.passes()) << "the interior term alone should miss the boundary contribution: "
-                                    << describe(interior);
+    // psdr's first term is the interior alone, which must miss the boundary contribution (was has one term).
+    if (d.terms[0].name == "interior") {
+        const DiffCheck interior =
+            check_against(d.terms[0].value, d.terms[0].stderr_img, fd.derivative, fd.stderr_img);
+        std::printf("  interior only: %s\n", describe(interior).c_str());
+        EXPECT_FALSE(interior.passes()) << "the interior term alone should miss the boundary contribution: "
+                                        << describe(interior);
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(WasValidation, WasScene,

@@ -3,6 +3,7 @@
 #include "core/batch_stats.h"
 #include "core/interrupt.h"
 #include "core/stratified.h"
+#include "diff/film_sample.h"
 #include "diff/interior_media.h"
 #include "diff/material_form.h"
 #include "render/light_medium.h"
@@ -23,25 +24,6 @@ PathSettings path_settings(const Scene& scene) {
 }
 
 namespace {
-
-struct FilmSample {
-    Vec2f offset; // from the pixel center, in pixels
-    float pdf;    // density of `offset`
-};
-
-// A defensive mixture of the normalized filter and the uniform density on its support square: the density is
-// bounded below, so P(s(θ))/p and its derivative stay bounded for any continuous filter (a tent's derivative
-// would have unbounded variance under pure filter sampling). The antithetic partner mirrors the offset about
-// the pixel center (paper 001 §5.1); the mixture is point-symmetric, so both have the same density.
-FilmSample sample_film(const ReconstructionFilter& filter, Sampler& sampler, bool mirror) {
-    const float r = filter.radius();
-    const float choose = sampler.next_1d();
-    const Vec2f u = sampler.next_2d();
-    Vec2f offset = choose < 0.5f ? filter.sample(u) : Vec2f((2.f * u.x - 1.f) * r, (2.f * u.y - 1.f) * r);
-    if (mirror) offset = offset * -1.f;
-    const float pdf = 0.5f * filter.eval_normalized(offset) + 0.5f / (4.f * r * r);
-    return {offset, pdf};
-}
 
 // One camera path of pixel (x, y) with the image-space first vertex: the film position is drawn by filter
 // importance sampling, as the renderer does (stratified over the pixel's samples), and its ray stays fixed;

@@ -14,40 +14,9 @@ Vec3<Var> tangent_part(const Vec3<Var>& v) {
 
 } // namespace
 
-namespace {
-
-// The consistent estimator's coefficients on the samples not in [skip, skip + len) (Algorithm 2 lines 10–13:
-// field_i = w_i / Z, divergence_i = ∂w_i / Z − w_i G / Z²), scaled by `scale` and added to `out`.
-void add_ratio(std::span<const double> w, std::span<const Vec3f> g, size_t skip, size_t len, double scale,
-               WarpCoefficients& out) {
-    double z = 0.0;
-    Vec3d gz(0.0);
-    for (size_t i = 0; i < w.size(); ++i)
-        if (i < skip || i >= skip + len) {
-            z += w[i];
-            gz += Vec3d(g[i]);
-        }
-    if (!(z > 0.0)) return;
-    for (size_t i = 0; i < w.size(); ++i)
-        if (i < skip || i >= skip + len) {
-            out.field[i] += scale * w[i] / z;
-            out.divergence[i] += Vec3f((Vec3d(g[i]) / z - gz * (w[i] / (z * z))) * scale);
-        }
-}
-
-} // namespace
-
 WarpCoefficients warp_coefficients(std::span<const double> w, std::span<const Vec3f> g,
                                    const WarpOptions& o) {
     const size_t n = w.size();
-    if (o.jackknife && !o.unbiased && n >= 2) {
-        // The leave-one-out jackknife of the ratio: n F_n − (n − 1)/n Σ_k F_(−k) (the O(1/n) bias cancels).
-        WarpCoefficients out{std::vector<double>(n, 0.0), std::vector<Vec3f>(n, Vec3f(0.f))};
-        add_ratio(w, g, n, 0, double(n), out);
-        for (size_t k = 0; k < n; ++k)
-            add_ratio(w, g, k, 1, -double(n - 1) / double(n), out);
-        return out;
-    }
     WarpCoefficients out{std::vector<double>(n, 0.0), std::vector<Vec3f>(n, Vec3f(0.f))};
     if (n == 0) return out;
     // Prefix sums at the end of each batch: Z_k = Σ w_i, G_k = Σ ∂w_i (lines 10–11). The consistent estimator

@@ -33,9 +33,6 @@ struct WarpOptions {
     float rr_stop = 0.4f;   // unbiased: probability to stop after each batch, N_batches ~ Geom(rr_stop)
     int rr_batch = 4;       // unbiased: samples per batch (the telescoping sum runs over prefixes of batches)
     int rr_cap = 512; // unbiased: at most this many samples (the paper's cap; truncation bias beyond it)
-    // Consistent estimator: the leave-one-out jackknife of Algorithm 2's ratio, n F_n − (n − 1)/n Σ_k F_(−k),
-    // which cancels the ratio's O(1/N') bias (not in the paper; still consistent, with more variance).
-    bool jackknife = false;
 };
 
 // One auxiliary ray: its direction and density, the boundary test at its hit and its direct warp.

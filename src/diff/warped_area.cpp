@@ -3,9 +3,9 @@
 #include "core/batch_stats.h"
 #include "core/interrupt.h"
 #include "core/rng.h"
-#include "core/stratified.h"
 #include "diff/auxiliary_rays.h"
 #include "diff/control_variate.h"
+#include "diff/film_sample.h"
 #include "diff/material_form.h"
 #include "render/emitter_hit.h"
 #include "render/light_medium.h"
@@ -43,7 +43,7 @@ struct WasContext {
     const Parameters& params;
     MaterialForm form;
     BoundaryTest boundary;
-    WarpOptions warp, film_warp; // at surface vertices and at the camera
+    WarpOptions warp;
     PathSettings settings;
     float sigma;    // the film auxiliary distribution's standard deviation (pixels): the filter's
     Vec3f camera;   // the center of projection
@@ -51,10 +51,9 @@ struct WasContext {
     float film_scale; // the boundary test's distance scale on the film: (pixels per radian)² / σ²
 
     WasContext(const Scene& s, const Parameters& p, const WasOptions& o)
-        : scene(s), params(p), form(s, p, FirstVertex::Material), boundary(s), warp(o.warp), film_warp(o.warp), settings(o.path),
+        : scene(s), params(p), form(s, p, FirstVertex::Material), boundary(s), warp(o.warp), settings(o.path),
           sigma(filter_sigma(*s.sensor->film->rfilter)),
           camera(s.sensor->to_world.apply_point(Vec3f(0.f))), film_edge(!s.sensor->film->sample_border) {
-        film_warp.jackknife = o.film_jackknife;
         // Pixels per radian at the film's center.
         const Film& film = *s.sensor->film;
         const Vec2f center(0.5f * float(film.width), 0.5f * float(film.height));
@@ -197,14 +196,17 @@ Color3<Var> warped_path(const WasContext& c, Sampler& sampler, AuxiliaryRng& rng
 
 // The film auxiliary sample at position `x` (Algorithm 2 on the film, §3.3): the boundary test of the point
 // seen through x and its film motion ∂θ s(y(θ)) (the direct warp). Beyond a cutting film edge the filters end:
-// a static discontinuity, B = 0 with no motion.
+// a static discontinuity, no motion there and B the distance to the edge.
 void film_auxiliary(const WasContext& c, const Vec2f& x, const Vec2f& aperture, PixelAuxiliarySample& a,
                     RayCounter& rays) {
     const Sensor& sensor = *c.scene.sensor;
     const Film& film = *sensor.film;
     a.warp = Vec2<Var>(x);
     if (c.film_edge && (x.x < 0.f || x.y < 0.f || x.x > float(film.width) || x.y > float(film.height))) {
-        a.boundary = 0.f;
+        // B = D(x', the film's edge) (diff/boundary_test.h's distance term, in the film's metric).
+        const float dx = std::max({-x.x, x.x - float(film.width), 0.f});
+        const float dy = std::max({-x.y, x.y - float(film.height), 0.f});
+        a.boundary = float(std::expm1(std::min(0.5 * double(dx * dx + dy * dy) / double(c.sigma * c.sigma), 80.0)));
         return;
     }
     const Ray ray = sensor.sample_ray(x, aperture).first;
@@ -229,45 +231,51 @@ std::pair<Vec3f, Vec3f> direction_gradient(const Sensor& sensor, const Vec2f& x,
     return {(d(h, 0.f) - d(-h, 0.f)) * (0.5f / h), (d(0.f, h) - d(0.f, -h)) * (0.5f / h)};
 }
 
-// One camera sample of pixel (px, py): the film position x ~ the filter, warped on the film (value x,
-// derivative V(x)), the camera ray through the warped position, P_j(x(θ)) J / p and the path behind it.
+// One camera sample of pixel (px, py): the film position x (diff/film_sample.h), warped on the film (value x,
+// derivative V(x)), the camera ray through the warped position, P_j(x(θ)) J / p(x) and the path behind it.
 struct CameraSample {
     Color3<Var> value;
+    Color3f radiance;   // L(x): the value without P_j / p
     Vec2f offset;       // x − the pixel center
+    float pdf = 0.f;    // p(x)
     Vec2<Var> position; // x(θ)
 };
 
 CameraSample camera_sample(const WasContext& c, Sampler& sampler, AuxiliaryRng& rng, int px, int py,
-                           const PixelStratum& stratum, RayCounter& rays) {
+                           RayCounter& rays) {
     const Sensor& sensor = *c.scene.sensor;
     const Film& film = *sensor.film;
-    const Vec2f x = film.sample_position(px, py, stratum(sampler.next_2d()));
+    const FilmSample fs = sample_film(*film.rfilter, sampler, false);
+    const Vec2f x = Vec2f(px + 0.5f, py + 0.5f) + fs.offset;
+    CameraSample out{Color3<Var>(Var(0.f)), Color3f(0.f), fs.offset, fs.pdf, Vec2<Var>(x)};
+    const float P0 = film.filter_weight(px, py, x);
+    if (!(P0 > 0.f)) return out;
     const Vec2f aperture = sampler.next_2d();
     const auto [ray, ray_weight] = sensor.sample_ray(x, aperture);
     ++rays.rays;
-    CameraSample out{Color3<Var>(Var(0.f)), Vec2f(x.x - (px + 0.5f), x.y - (py + 0.5f)), Vec2<Var>(x)};
 
-    std::vector<PixelAuxiliarySample> aux = sample_pixel_auxiliary(c.sigma, c.film_warp, rng);
+    std::vector<PixelAuxiliarySample> aux = sample_pixel_auxiliary(c.sigma, c.warp, rng);
     for (PixelAuxiliarySample& a : aux)
         film_auxiliary(c, x + a.offset, aperture, a, rays);
-    const PixelWarpEstimate e = estimate_pixel_warp(x, aux, c.sigma, c.film_warp);
+    const PixelWarpEstimate e = estimate_pixel_warp(x, aux, c.sigma, c.warp);
     out.position = e.position;
 
-    const Var P = film.filter_weight(px, py, e.position);
-    if (!(P.v > 0.f)) return out;
-    const Var weight = P / Var(P.v) * e.jacobian * Var(ray_weight.x);
+    const Var weight = film.filter_weight(px, py, e.position) / Var(fs.pdf) * e.jacobian * Var(ray_weight.x);
     const auto [dx, dy] = direction_gradient(sensor, x, aperture);
     const Vec3<Var> moved = Vec3<Var>(ray.d) + Vec3<Var>(dx) * (e.position.x - Var(x.x)) +
                             Vec3<Var>(dy) * (e.position.y - Var(x.y));
     const Vec3<Var> direction = c.form.direction_from_reference_camera(moved);
     const SurfaceInteraction3f first = c.scene.intersect(ray);
+    Color3<Var> L(Var(0.f));
     if (!first.is_valid()) {
-        if (!c.settings.hide_emitters) out.value = environment(c, ray.d, direction) * weight;
-        return out;
+        if (!c.settings.hide_emitters) L = environment(c, ray.d, direction);
+    } else {
+        SurfaceInteraction<Var> x1 = warped_vertex(c.params, first, c.form.camera_position(ray.o), direction);
+        x1.wi = x1.to_local(-direction);
+        L = warped_path(c, sampler, rng, ray, first, x1, rays);
     }
-    SurfaceInteraction<Var> x1 = warped_vertex(c.params, first, c.form.camera_position(ray.o), direction);
-    x1.wi = x1.to_local(-direction);
-    out.value = warped_path(c, sampler, rng, ray, first, x1, rays) * weight;
+    out.radiance = Color3f(L.x.v, L.y.v, L.z.v);
+    out.value = L * weight;
     return out;
 }
 
@@ -286,9 +294,10 @@ class PixelLinearModel {
         }
         ++n_;
     }
+    bool ready() const { return n_ >= 6; }
     // The control variate of channel `ch` fitted so far; false until enough samples.
     bool fit(int ch, LinearControlVariate& cv) const {
-        if (n_ < 6) return false;
+        if (!ready()) return false;
         double coef[3][5];
         if (!solve(coef)) return false;
         cv.mu_g = float(coef[0][ch]);
@@ -328,19 +337,18 @@ class PixelLinearModel {
     int n_ = 0;
 };
 
-// The score ∇ log P_j of the film sampling density at offset x (central differences of the separable
-// profile): the control variate's ∂x k / k, whose mean is zero and E[x sᵀ] = −I for any continuous filter.
-Vec2f filter_score(const ReconstructionFilter& f, const Vec2f& x) {
+// ∇P_j(x) / p(x) at the film sample (central differences of the filter): the factor of the filter's gradient
+// term M = g ⟨∇P_j / p, V⟩ (Appendix D), whose mean over p is zero and E[x (∇P_j / p)ᵀ] = −I for a continuous
+// filter that vanishes at its support's edge (integration by parts).
+Vec2f filter_gradient_ratio(const Film& film, int px, int py, const Vec2f& offset, float pdf) {
     constexpr float h = 1e-3f;
-    const auto s = [&](float t) {
-        const float v = f.eval(t);
-        return v > 0.f ? (f.eval(t + h) - f.eval(t - h)) / (2.f * h * v) : 0.f;
-    };
-    return {s(x.x), s(x.y)};
+    const Vec2f x(px + 0.5f + offset.x, py + 0.5f + offset.y);
+    const auto P = [&](float dx, float dy) { return film.filter_weight(px, py, Vec2f(x.x + dx, x.y + dy)); };
+    return Vec2f(P(h, 0.f) - P(-h, 0.f), P(0.f, h) - P(0.f, -h)) * (0.5f / (h * pdf));
 }
 
-// Q − M = −(C(x) − E[C]) (Appendix D) for one channel; the paper's C with the filter's own score:
-// C = ⟨s(x), μ_g μ_V + A x⟩, E[C] = −tr(A).
+// Q − M = −(C(x) − E[C]) (Appendix D) for one channel, with the sample's own ∇P_j / p in place of the paper's
+// Gaussian score: C = ⟨∇P_j / p, μ_g μ_V + A x⟩, E[C] = −tr(A).
 float control_correction(const LinearControlVariate& cv, const Vec2f& x, const Vec2f& score) {
     const Vec2f b = cv.mu_v * cv.mu_g;
     const Vec2f ax(LinearControlVariate::dot2(cv.row(0), x), LinearControlVariate::dot2(cv.row(1), x));
@@ -352,13 +360,12 @@ struct PixelSums {
     Image primal, derivative;
 };
 
-// One batch of the forward-mode estimator. The control variate of each pixel is the linear model fitted to the
-// previous batch (`models`, replaced by this batch's fit): fixed within the batch, so that its known mean
-// holds for the stratified film positions (a model refitted after every sample correlates with the strata
-// that remain and biases the estimate).
+// One batch of the forward-mode estimator. The control variate of each pixel sample is the linear model fitted
+// to the pixel's previous samples, or until it has enough of them, the previous pixel's of the tile (samples
+// independent of the current one either way, so the control's known mean holds given them; tiles do not depend
+// on the thread count).
 PixelSums forward_batch(const WasContext& c, const WasOptions& options, uint64_t seed,
-                        std::vector<PixelLinearModel>& models, const std::function<void(float)>& progress,
-                        SharedSampleCost& cost) {
+                        const std::function<void(float)>& progress, SharedSampleCost& cost) {
     const Film& film = *c.scene.sensor->film;
     PixelSums out{Image(film.width, film.height), Image(film.width, film.height)};
     const float r = film.rfilter->radius();
@@ -368,6 +375,7 @@ PixelSums forward_batch(const WasContext& c, const WasOptions& options, uint64_t
         uint64_t tape_nodes = 0;
         std::vector<float> tangent;
         Tape& tape = Tape::current();
+        PixelLinearModel previous;
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
                 check_interrupt();
@@ -377,35 +385,32 @@ PixelSums forward_batch(const WasContext& c, const WasOptions& options, uint64_t
                 const bool control = options.control_variate &&
                                      (!c.film_edge || (x + 0.5f >= r && y + 0.5f >= r &&
                                                        film.width - x - 0.5f >= r && film.height - y - 0.5f >= r));
-                PixelLinearModel& model = models[pixel];
-                PixelLinearModel fitted;
-                LinearControlVariate cv[3];
-                bool fit[3] = {false, false, false};
-                for (int ch = 0; ch < 3 && control; ++ch)
-                    fit[ch] = model.fit(ch, cv[ch]);
+                PixelLinearModel model;
                 Vec3d primal(0.0), derivative(0.0);
                 for (int m = 0; m < options.spp; ++m) {
                     sampler.start(seed, pixel, uint64_t(m));
                     AuxiliaryRng rng(seed, pixel, uint64_t(m));
                     tape.clear();
-                    const CameraSample s = camera_sample(c, sampler, rng, x, y, PixelStratum(m, options.spp, seed, pixel), rays);
+                    const CameraSample s = camera_sample(c, sampler, rng, x, y, rays);
                     tape_nodes += tape.size();
                     if (!finite(s.value)) continue;
                     tape.forward(c.params.direction().data(), tangent);
-                    const Color3f g(s.value.x.v, s.value.y.v, s.value.z.v);
+                    const Color3f value(s.value.x.v, s.value.y.v, s.value.z.v);
                     Vec3d d(tangent_of(s.value.x, tangent), tangent_of(s.value.y, tangent),
                             tangent_of(s.value.z, tangent));
                     if (control) {
                         const Vec2f v(tangent_of(s.position.x, tangent), tangent_of(s.position.y, tangent));
-                        const Vec2f score = filter_score(*film.rfilter, s.offset);
+                        const Vec2f ratio = filter_gradient_ratio(film, x, y, s.offset, s.pdf);
+                        LinearControlVariate cv;
+                        const PixelLinearModel& fitted = model.ready() ? model : previous;
                         for (int ch = 0; ch < 3; ++ch)
-                            if (fit[ch]) d[ch] += control_correction(cv[ch], s.offset, score);
-                        if (std::isfinite(v.x) && std::isfinite(v.y)) fitted.add(s.offset, g, v);
+                            if (fitted.fit(ch, cv)) d[ch] += control_correction(cv, s.offset, ratio);
+                        if (std::isfinite(v.x) && std::isfinite(v.y)) model.add(s.offset, s.radiance, v);
                     }
-                    primal += Vec3d(g.x, g.y, g.z);
+                    primal += Vec3d(value.x, value.y, value.z);
                     if (is_finite(Vec3f(d))) derivative += d;
                 }
-                model = fitted;
+                if (model.ready()) previous = model;
                 out.primal.at(x, y) = Color3f(primal / double(options.spp));
                 out.derivative.at(x, y) = Color3f(derivative / double(options.spp));
             }
@@ -441,13 +446,12 @@ DerivativeImage was_derivative(const Scene& scene, const Parameters& params, con
     const int B = options.batches;
     ImageBatches primal, derivative;
     SharedSampleCost cost;
-    std::vector<PixelLinearModel> models(size_t(scene.sensor->film->width) * size_t(scene.sensor->film->height));
     for (int b = 0; b < B; ++b) {
         auto progress = options.progress
                             ? std::function<void(float)>([&, b](float f) { options.progress((b + f) / B); })
                             : std::function<void(float)>();
         const PixelSums s =
-            forward_batch(c, options, options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b), models, progress, cost);
+            forward_batch(c, options, options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b), progress, cost);
         primal.add(s.primal);
         derivative.add(s.derivative);
     }
@@ -495,7 +499,7 @@ Gradient was_gradient(const Scene& scene, const Parameters& params, const Image&
                     sampler.start(options.seed, pixel, uint64_t(m));
                     AuxiliaryRng rng(options.seed, pixel, uint64_t(m));
                     tape.clear();
-                    const CameraSample s = camera_sample(c, sampler, rng, x, y, PixelStratum(m, options.spp, options.seed, pixel), rays);
+                    const CameraSample s = camera_sample(c, sampler, rng, x, y, rays);
                     tape_nodes += tape.size();
                     if (!finite(s.value)) continue;
                     primal += Vec3d(s.value.x.v, s.value.y.v, s.value.z.v);

@@ -6,8 +6,10 @@
 // estimated from auxiliary rays: diff/warp_field.h, diff/auxiliary_rays.h). A sampled direction ω becomes
 // ω(θ) = ω + (θ − θ0) V(ω) and the contribution is multiplied by the divergence Jacobian 1 + (θ − θ0) ∇·V, so
 // the tape's derivative of the path contribution is the estimator of Eq. 5 at every vertex at once.
-//   camera    the film position x is sampled from the reconstruction filter; the auxiliary positions are
-//             N(x, σ² I) on the film with σ the filter's standard deviation (§3.3); the filter's gradient
+//   camera    the film position x is sampled from a defensive mixture of the reconstruction filter and the
+//             uniform density on its support (diff/film_sample.h: the filter's score ∂x k / k is unbounded
+//             where a truncated filter falls to zero, the mixture's ∂x k / p is not); the auxiliary positions
+//             are N(x, σ² I) on the film with σ the filter's standard deviation (§3.3); the filter's gradient
 //             term is controlled by the linear control variate of Appendix D (forward mode);
 //   surfaces  the BSDF-sampled direction and the emitter-sampled direction (NEE) are warped with vMF
 //             auxiliary rays (κ, N'); the next vertex is where the warped ray meets the moving triangle;
@@ -23,8 +25,16 @@
 namespace penumbra {
 
 struct WasOptions {
-    WarpOptions warp;            // κ, N', antithetic, unbiased, jackknife at surface vertices (diff/warp_field.h)
-    bool film_jackknife = true;  // the jackknife at the camera vertex (measured: removes the film warp's bias)
+    // κ, N', antithetic, unbiased (diff/warp_field.h). Defaults by measurement (docs/warped-area-sampling.md):
+    // N' = 32 (the paper's 8 leaves the consistent estimator biased by 15–50% of the boundary derivative on
+    // the validation scenes) and κ = 1e5 (redner's and Mitsuba 3's; the paper's 1e4 leaves the shadow under
+    // an area light biased, z +1 to +5, and the corkscrew's, as the paper found for its OPTIM-CORKSCREW).
+    WarpOptions warp = [] {
+        WarpOptions o;
+        o.aux_count = 32;
+        o.weight.kappa = 1e5f;
+        return o;
+    }();
     bool control_variate = true; // Appendix D at the camera vertex (forward mode)
     int spp = 16;                // samples per pixel (per batch)
     int batches = 1;

