@@ -219,9 +219,9 @@ SurfaceInteraction3f seen_surface(const Scene& scene, const Ray& ray, bool media
     return scene.intersect(ray);
 }
 
-// Where an edge's image crosses the film at fraction t: the film point s, the image-space normal n from side 1
-// (the edge's own surface) to side 2 (the background of a silhouette, the other face of a crease), and the
-// two sides' primary rays and hits.
+// Where an edge's image crosses the film at fraction t: the film point s, the image-space normal n from side
+// 1 (the edge's own surface) to side 2 (the background of a silhouette, the other face of a crease), and the
+// two sides' primary rays and hits (the edge's own side: its face at the edge point, own_face()).
 struct EdgeCrossing {
     bool valid = false;
     Vec2f s, n;
@@ -232,15 +232,64 @@ struct EdgeCrossing {
     Color3f weight[2];
 };
 
+// Twice the offset scale of rays leaving points of the segment from the camera to x (see cross_edge).
+float ray_clearance(const Sensor& sensor, const Vec3f& x) {
+    const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
+    return 2.f * RayEpsilon * (1.f + max_component(abs(eye)) + norm(x - eye));
+}
+
 // The probes' distance (pixels) from a discontinuity's image at s, seen at world point x, in image direction n
 // (see cross_edge).
 float probe_offset(const Sensor& sensor, const Vec3f& x, const Vec2f& s, const Vec2f& n) {
-    const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
-    const float clearance = 2.f * RayEpsilon * (1.f + max_component(abs(eye)) + norm(x - eye));
+    const float clearance = ray_clearance(sensor, x);
     const Ray center = sensor.sample_ray(s, Vec2f(0.5f)).first, side = sensor.sample_ray(s + n, Vec2f(0.5f)).first;
     const float depth = norm(x - center.o);
     const float world_per_pixel = norm(side.o + side.d * depth - (center.o + center.d * depth));
     return std::clamp(clearance / world_per_pixel, 1e-3f, 0.05f);
+}
+
+// The radiance's limit at the edge on the side of a probe ray: the edge's own face that the ray sees next to
+// the edge, at the edge point (parameter tau) moved into the face by `clearance` (at a crease: a concave
+// crease's other face would otherwise lie within the offsets of the rays leaving it, at a right angle exactly
+// in the offset plane; a silhouette's near side is the limit at the edge itself, where the shading terminator
+// term ends its curves). The face is the one whose plane the ray meets on the face's side of the edge (its
+// apex's barycentric coordinate positive) and, of two such faces (both lie on the near side of a silhouette),
+// the nearer. The probe's own hit may be another face: where a mesh is seen at a grazing angle, the images of
+// several edges fall within the probe offset (the ring edges of a tube seen along its length), and the probe
+// sees a face one or more edges away, whose shading and lighting are not those of the edge's side.
+SurfaceInteraction3f own_face(const Shape& shape, const Edge& e, float tau, const Ray& ray, float clearance) {
+    const TriangleMesh& m = shape.mesh;
+    const Vec3f a = m.positions[e.v0], b = m.positions[e.v1];
+    int32_t seen = -1;
+    float seen_t = Infinity, seen_bary[3] = {0.f, 0.f, 0.f};
+    for (const int32_t f : {e.f0, e.f1}) {
+        if (f < 0) continue;
+        const uint32_t* i = &m.indices[3 * size_t(f)];
+        const Vec3f p0 = m.positions[i[0]], e1 = m.positions[i[1]] - p0, e2 = m.positions[i[2]] - p0;
+        // Möller–Trumbore without the inside test.
+        const Vec3f q = cross(ray.d, e2), o = ray.o - p0, r = cross(o, e1);
+        const float det = dot(e1, q);
+        if (!(std::abs(det) > 0.f)) continue;
+        const float t = dot(e2, r) / det, b1 = dot(o, q) / det, b2 = dot(ray.d, r) / det;
+        const float bary[3] = {1.f - b1 - b2, b1, b2};
+        int apex = 0;
+        for (int k = 0; k < 3; ++k)
+            if (!(m.positions[i[k]] == a) && !(m.positions[i[k]] == b)) apex = k;
+        if (!(t > 0.f) || !(bary[apex] > 0.f) || !(t < seen_t)) continue;
+        // The point's barycentrics in f: w toward the apex (its distance from the edge over the apex's, at
+        // most 1/2), and (1 − w)(1 − tau), (1 − w) tau at (f's copies of) v0 and v1.
+        const float height = norm(cross(m.positions[i[apex]] - a, b - a)) / norm(b - a);
+        const float w = std::min(clearance / height, 0.5f);
+        float at_edge[3];
+        for (int k = 0; k < 3; ++k) {
+            const Vec3f p = m.positions[i[k]];
+            at_edge[k] = k == apex ? w : (1.f - w) * (p == a ? 1.f - tau : tau);
+        }
+        seen = f, seen_t = t;
+        std::copy(at_edge, at_edge + 3, seen_bary);
+    }
+    if (seen < 0) return {};
+    return shape.compute_surface_interaction(ray, seen_t, uint32_t(seen), seen_bary[1], seen_bary[2]);
 }
 
 EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& se, bool media, float t,
@@ -256,13 +305,14 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
     const Vec3f x_edge = p0 + (p1 - p0) * out.tau;
     out.x_edge = x_edge;
 
-    // The two sides, probed at s ± eps n2. The radiances are the limits at the edge, but rays leaving a probed
-    // point start RayEpsilon-scaled offsets off its surface: a shadow ray toward a light at (or near) the camera
-    // runs back along the probe and, closer to the edge than those offsets, clips the occluder and reports a
-    // false shadow. The probe therefore clears the edge by twice the offset scale of the segment camera–edge
-    // (which bounds the offset of any point behind the edge as seen at the edge's depth), clamped to
-    // [1e-3, 0.05] pixels so that the radiances and velocities stay the limits at the edge up to a small
-    // fraction of a pixel.
+    // The two sides, probed at s ± eps n2. The radiances are the limits at the edge, but rays leaving a
+    // probed point behind the edge start RayEpsilon-scaled offsets off its surface: a shadow ray toward a
+    // light at (or near) the camera runs back along the probe and, closer to the edge than those offsets,
+    // clips the occluder and reports a false shadow. The probe therefore clears the edge by twice the offset
+    // scale of the segment camera–edge (which bounds the offset of any point behind the edge as seen at the
+    // edge's depth), clamped to [1e-3, 0.05] pixels so that the radiances and velocities stay the limits at
+    // the edge up to a small fraction of a pixel. The edge's own side is then evaluated on its face at the
+    // edge point (own_face).
     const float eps = probe_offset(sensor, x_edge, out.s, n2);
     Side sides[2];
     for (int k = 0; k < 2; ++k) {
@@ -272,13 +322,19 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
     }
     out.n = n2 * -1.f; // from side 0 (probed at +eps) to side 1
     if (se.crease) {
-        // A crease is seen where both sides are the edge's own faces at the edge's depth (a convex ridge recedes
-        // on both sides, a valley comes closer), not another part of the same shape hiding it.
+        // A crease is seen where a side is the edge's own surface at the edge's depth (a convex ridge recedes
+        // on both sides, a valley comes closer), not another part of the same shape hiding it. One side
+        // suffices: next to a silhouette seen at a grazing angle the other probe may pass beyond it. Both
+        // sides' radiances are the limits on the edge's two faces.
         const auto at_edge = [&](int k) {
             const float d = norm(x_edge - out.ray[k].o);
             return out.hit[k].is_valid() && out.hit[k].shape == se.shape && std::abs(out.hit[k].t - d) < 0.02f * d;
         };
-        out.valid = at_edge(0) && at_edge(1) && out.hit[0].prim_index != out.hit[1].prim_index;
+        if (!at_edge(0) && !at_edge(1)) return out;
+        for (int k = 0; k < 2; ++k)
+            out.hit[k] = own_face(*se.shape, se.edge, out.tau, out.ray[k], ray_clearance(sensor, x_edge));
+        out.valid =
+            out.hit[0].is_valid() && out.hit[1].is_valid() && out.hit[0].prim_index != out.hit[1].prim_index;
         return out;
     }
     // A silhouette: order the sides so that the first is the edge's own (near) one, n pointing to the other.
@@ -289,7 +345,9 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
         std::swap(sides[0], sides[1]);
         out.n = n2;
     }
-    out.valid = sides[0] == Side::Near && sides[1] == Side::Far;
+    if (sides[0] != Side::Near || sides[1] != Side::Far) return out;
+    out.hit[0] = own_face(*se.shape, se.edge, out.tau, out.ray[0], 0.f);
+    out.valid = out.hit[0].is_valid();
     return out;
 }
 
@@ -342,10 +400,11 @@ Color3f jump(const Scene& scene, const EdgeCrossing& c, bool image_space, bool m
     return seen_radiance(scene, c.ray[0], c.hit[0], media, settings, sampler, rays) * c.weight[0] - L_2;
 }
 
-// One sample of the shading terminator of a triangle (diff/shading_terminator.h; the image-space first vertex):
-// the curve's points on a line b_k = u of a sweep k (diff/shading_terminator.h), and by the coarea formula
+// One sample of the shading terminator of a triangle (diff/shading_terminator.h; the image-space first
+// vertex): the curve's points on a line b_k = u of a sweep k (diff/shading_terminator.h), and by the coarea
+// formula
 //   ∫_C ΔL v_n dl = ∫ du Σ_points ΔL ∂θG̃ |det ds/db| / |∂G̃/∂w|,   v_n = ∂θG̃ / |∇_s G̃|,
-// with ΔL = L(G̃ > 0) − L(G̃ < 0) probed on either side of the curve's image, |det ds/db| = |ds/dA| |e1 × e2|,
+// with ΔL = L(G̃ > 0) − L(G̃ < 0) the limits on either side of the curve, |det ds/db| = |ds/dA| |e1 × e2|,
 // and ∂θG̃ on the tape at the point where the fixed camera ray through s meets the moving triangle.
 BoundarySample sample_terminator(const Scene& scene, const Silhouettes& sil, const MaterialForm& form, size_t e,
                                  float u, Sampler& sampler, const PathSettings& settings, RayCounter& rays) {
@@ -372,44 +431,26 @@ BoundarySample sample_terminator(const Scene& scene, const Silhouettes& sil, con
         const float sweeps = std::abs(q.dG_db1) + std::abs(q.dG_db2) + std::abs(q.dG_db1 - q.dG_db2);
         if (!sensor.film_position(x, normalize(ng), s, j) || !(sweeps > 0.f)) continue;
         const float ds_dA = j;
-        // The curve's image tangent (the image of its 3D tangent) and the image normal toward G̃ > 0 (the image of
-        // a 3D step along which G̃ grows), from images of small steps.
-        const float step = 1e-3f * (norm(e1) + norm(e2));
-        const Vec3f tangent = e1 * -q.dG_db2 + e2 * q.dG_db1, up = e1 * q.dG_db1 + e2 * q.dG_db2;
-        Vec2f s_t, s_u;
-        if (!sensor.film_position(x + tangent * (step / norm(tangent)), ng, s_t, j) ||
-            !sensor.film_position(x + up * (step / norm(up)), ng, s_u, j))
-            continue;
-        const Vec2f d_t = s_t - s;
-        Vec2f n_s = Vec2f(-d_t.y, d_t.x) / std::sqrt(d_t.x * d_t.x + d_t.y * d_t.y);
-        if (n_s.x * (s_u.x - s.x) + n_s.y * (s_u.y - s.y) < 0.f) n_s = n_s * -1.f;
         // The curve point must be what the camera sees (a terminator on the far side of a solid lies within a few
         // percent of the near side's depth next to its silhouette): the ray through s meets this triangle first.
-        const Ray ray = sensor.sample_ray(s, Vec2f(0.5f)).first;
+        const auto [ray, weight] = sensor.sample_ray(s, Vec2f(0.5f));
         const SurfaceInteraction3f center = seen_surface(scene, ray, sil.media, rays);
         if (!center.is_valid() || center.shape != tt.shape || center.prim_index != tt.prim) continue;
-        // The radiance on either side, 0.01 pixel off the curve: the same surface on both, within 10% of the
-        // curve point's depth (the terminator lies next to silhouettes, where the surface is seen at grazing
-        // angles and 0.01 pixel spans a sizeable depth; a tighter bound there dropped ~10% of the term).
+        // The radiance's limits on either side of the curve, on this triangle: at the curve point moved by
+        // 1e-4 along ±∇G̃ in barycentric coordinates, seen from the camera. Probes through the film next to
+        // the curve would see past the triangle where the dark side is a strip, narrower than their offset,
+        // between the curve and a silhouette (whose near side is the limit at the edge, cross_edge).
+        const float gradient = std::sqrt(sqr(q.dG_db1) + sqr(q.dG_db2));
         Color3f L[2];
-        bool seen = true;
-        for (int side = 0; side < 2 && seen; ++side) {
-            const auto [probe, weight] = sensor.sample_ray(s + n_s * (side == 0 ? 0.01f : -0.01f), sampler.next_2d());
-            const SurfaceInteraction3f hit = seen_surface(scene, probe, sil.media, rays);
-            seen = hit.is_valid() && hit.shape == tt.shape && std::abs(hit.t - center.t) < 0.1f * center.t;
-            if (seen)
-                L[side] = seen_radiance(scene, probe, hit, sil.media, settings, sampler, rays) * weight;
+        for (int side = 0; side < 2; ++side) {
+            const float shift = (side == 0 ? 1e-4f : -1e-4f) / gradient;
+            const float b1 = q.bary.x + q.dG_db1 * shift, b2 = q.bary.y + q.dG_db2 * shift;
+            const Vec3f y = p0 + e1 * b1 + e2 * b2;
+            const Ray probe(ray.o, normalize(y - ray.o));
+            const SurfaceInteraction3f hit =
+                tt.shape->compute_surface_interaction(probe, norm(y - ray.o), tt.prim, b1, b2);
+            L[side] = seen_radiance(scene, probe, hit, sil.media, settings, sampler, rays) * weight;
         }
-        if (!seen) continue;
-        // Next to a silhouette the primary term probes its near side probe_offset() inside: where the terminator's
-        // dark side is narrower than that, the silhouette's jump already counts the strip as lit, and the curve
-        // is left to it (a dark strip of that width between two terminator branches moves as one, its two
-        // curves' terms cancelling).
-        const SurfaceInteraction3f dark =
-            seen_surface(scene, sensor.sample_ray(s - n_s * probe_offset(sensor, x, s, n_s), Vec2f(0.5f)).first, sil.media, rays);
-        if (!(dark.is_valid() && dark.shape == tt.shape && std::abs(dark.t - center.t) < 0.1f * center.t &&
-              dot(dark.sh_frame.n, eye - dark.p) < 0.f))
-            continue;
         // G̃ = n_s · (c − x) on the tape, at the fixed ray through s.
         const SurfaceInteraction3f hit =
             tt.shape->compute_surface_interaction(ray, norm(x - ray.o), tt.prim, q.bary.x, q.bary.y);
