@@ -232,16 +232,11 @@ struct EdgeCrossing {
     Color3f weight[2];
 };
 
-// Twice the offset scale of rays leaving points of the segment from the camera to x (see cross_edge).
-float ray_clearance(const Sensor& sensor, const Vec3f& x) {
-    const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
-    return 2.f * RayEpsilon * (1.f + max_component(abs(eye)) + norm(x - eye));
-}
-
 // The probes' distance (pixels) from a discontinuity's image at s, seen at world point x, in image direction n
 // (see cross_edge).
 float probe_offset(const Sensor& sensor, const Vec3f& x, const Vec2f& s, const Vec2f& n) {
-    const float clearance = ray_clearance(sensor, x);
+    const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
+    const float clearance = 2.f * RayEpsilon * (1.f + max_component(abs(eye)) + norm(x - eye));
     const Ray center = sensor.sample_ray(s, Vec2f(0.5f)).first, side = sensor.sample_ray(s + n, Vec2f(0.5f)).first;
     const float depth = norm(x - center.o);
     const float world_per_pixel = norm(side.o + side.d * depth - (center.o + center.d * depth));
@@ -332,7 +327,7 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
         };
         if (!at_edge(0) && !at_edge(1)) return out;
         for (int k = 0; k < 2; ++k)
-            out.hit[k] = own_face(*se.shape, se.edge, out.tau, out.ray[k], ray_clearance(sensor, x_edge));
+            out.hit[k] = own_face(*se.shape, se.edge, out.tau, out.ray[k], 2.f * ray_offset_scale(x_edge));
         out.valid =
             out.hit[0].is_valid() && out.hit[1].is_valid() && out.hit[0].prim_index != out.hit[1].prim_index;
         return out;
