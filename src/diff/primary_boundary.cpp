@@ -167,7 +167,8 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
             if (!shading_jumps(*se.shape, e, textured)) continue;
             // On a solid, creases between faces turned away from the camera are hidden by the solid itself.
             const Vec3f to_eye = parallel ? forward * -1.f : eye - m.positions[e.v0];
-            if (se.closed && !(dot(face_normal(m, e.f0), to_eye) > 0.f)) continue;
+            if (se.closed && !(dot(face_normal(m, e.f0), to_eye) * (se.inside_out ? -1.f : 1.f) > 0.f))
+                continue;
             crease = true;
         }
         const Vec3f p0 = m.positions[e.v0], p1 = m.positions[e.v1];
