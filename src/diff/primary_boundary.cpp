@@ -226,6 +226,7 @@ SurfaceInteraction3f seen_surface(const Scene& scene, const Ray& ray, bool media
 struct EdgeCrossing {
     bool valid = false;
     Vec2f s, n;
+    bool crease = false;
     float tau = 0.f; // the edge parameter (v0 → v1) of the 3D point seen at s
     Vec3f x_edge;    // that point
     Ray ray[2];
@@ -317,6 +318,7 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
         sides[k] = classify(out.hit[k], *se.shape, norm(x_edge - out.ray[k].o));
     }
     out.n = n2 * -1.f; // from side 0 (probed at +eps) to side 1
+    out.crease = se.crease;
     if (se.crease) {
         // A crease is seen where a side is the edge's own surface at the edge's depth (a convex ridge recedes
         // on both sides, a valley comes closer), not another part of the same shape hiding it. One side
@@ -377,13 +379,16 @@ ArrivingRadiance far_side(const Scene& scene, const EdgeCrossing& c, const PathS
     return out;
 }
 
-// The jump of the pixel integrand across the edge: L_1 − L_2 with the image-space first vertex; −L_2 in material
-// form, where the edge's own side is the interior term's (its material domain is not cut). Path-traced
-// estimates of the radiance seen on either side; in media the in-scattering in front of the edge, common to both
-// sides, is left out (only the far side beyond the edge's depth, `far`, is estimated; in material form the
-// medium's points in front of the edge are not cut either).
+// The jump of the pixel integrand across the edge: L_1 − L_2 with the image-space first vertex; −L_2 in
+// material form, where the edge's own side is the interior term's (its material domain is not cut).
+// Path-traced estimates of the radiance seen on either side; in media the in-scattering in front of the edge,
+// common to both sides, is left out (only the far side beyond the edge's depth, `far`, is estimated; in
+// material form the medium's points in front of the edge are not cut either). A crease's two sides share
+// their random numbers (light samples, BSDF samples), so that their difference is the jump rather than the
+// noise of two estimates.
 Color3f jump(const Scene& scene, const EdgeCrossing& c, bool image_space, bool media, const PathSettings& settings,
              Sampler& sampler, RayCounter& rays, ArrivingRadiance* far = nullptr) {
+    Sampler shared = sampler;
     Color3f L_2;
     if (media) {
         const ArrivingRadiance f = far_side(scene, c, settings, sampler, rays);
@@ -393,7 +398,9 @@ Color3f jump(const Scene& scene, const EdgeCrossing& c, bool image_space, bool m
         L_2 = trace_path<float>(scene, sampler, c.ray[1], c.hit[1], c.hit[1], ReferenceGeometry{}, settings, rays) * c.weight[1];
     }
     if (!image_space) return L_2 * -1.f;
-    return seen_radiance(scene, c.ray[0], c.hit[0], media, settings, sampler, rays) * c.weight[0] - L_2;
+    return seen_radiance(scene, c.ray[0], c.hit[0], media, settings, c.crease ? shared : sampler, rays) *
+               c.weight[0] -
+           L_2;
 }
 
 // One sample of the shading terminator of a triangle (diff/shading_terminator.h; the image-space first
