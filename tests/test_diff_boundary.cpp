@@ -151,6 +151,39 @@ TEST(DirectBoundary, TranslatingAreaLightPartlyOccluded) {
     expect_boundary_matters("moving_light.xml", "lamp.translate=1,0,0", 2e-2, 256, 256, false, true);
 }
 
+// A closed mesh wound inside out (flip_normals) casts the same shadow: which side its faces' normals point to
+// must not decide which of its edges graze a segment (with every convex edge taken for a concave one, the
+// direct term of such a cube was exactly zero). The soft shadow of a cube hanging above the view, under an
+// area light, with either winding.
+TEST(DirectBoundary, ShadowOfAClosedMeshWoundInsideOut) {
+    const auto direct = [](bool flip) {
+        const std::string xml = R"(<scene version="3.0.0">
+          <integrator type="path"><integer name="max_depth" value="2"/></integrator>
+          <sensor type="perspective"><float name="fov" value="40"/>
+            <transform name="to_world"><lookat origin="0,3,3" target="0,0,0" up="0,1,0"/></transform>
+            <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/></film></sensor>
+          <shape type="rectangle"><transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform>
+            <bsdf type="diffuse"/></shape>
+          <shape type="cube" id="occluder"><boolean name="flip_normals" value=")" +
+                                std::string(flip ? "true" : "false") + R"("/>
+            <transform name="to_world"><scale value="0.25"/><rotate y="1" angle="25"/><translate value="0,3.2,0"/>
+            </transform></shape>
+          <shape type="rectangle"><transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/>
+            <translate value="0.2,5,0"/></transform><emitter type="area"><rgb name="radiance" value="40"/></emitter>
+          </shape></scene>)";
+        auto scene = load_scene_string(xml);
+        Parameters params(*scene);
+        params.enable({parse_param_selection("occluder.translate=1,0,0")});
+        return psdr_derivative(*scene, params, batched(*scene, flip ? 31 : 37, 4, 0, 256, 0));
+    };
+    const PsdrDerivative outward = direct(false), inward = direct(true);
+    const DiffCheck c =
+        check_against(inward.direct, inward.direct_stderr, outward.direct, outward.direct_stderr);
+    std::printf("  direct term, cube wound inside out against outward: %s\n", describe(c).c_str());
+    EXPECT_TRUE(c.passes()) << describe(c);
+    EXPECT_LT(c.noise_relerr, 0.3) << "the shadow's motion must stand out of the noise: " << describe(c);
+}
+
 // (c) A shadow and a silhouette seen only through a glossy reflection: the indirect boundary term's two
 // techniques (emitter sources with the detector subpath one bounce long; multi-directional segments from the wall
 // past the cube's edges to the floor).

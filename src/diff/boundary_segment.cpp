@@ -28,11 +28,25 @@ Vec3f opposite_vertex(const TriangleMesh& m, int32_t f, const Vec3f& a, const Ve
     return best;
 }
 
-// Whether face f1 lies behind face f0's plane: a convex edge (of a solid, with outward normals).
+// Whether face f1 lies behind face f0's plane as seen from outside the solid: a convex edge (face normals
+// turned outward when the solid is wound inside out).
 bool convex_edge(const SceneEdges::SceneEdge& se) {
     const TriangleMesh& m = se.shape->mesh;
     const Vec3f a = m.positions[se.edge.v0], b = m.positions[se.edge.v1];
-    return dot(face_normal(m, se.edge.f0), opposite_vertex(m, se.edge.f1, a, b) - a) < 0.f;
+    const float behind = dot(face_normal(m, se.edge.f0), opposite_vertex(m, se.edge.f1, a, b) - a);
+    return se.inside_out ? behind > 0.f : behind < 0.f;
+}
+
+// The mesh's signed volume (divergence theorem: Σ p0 · (p1 × p2) / 6 over its faces), negative for a closed
+// mesh wound inside out.
+double signed_volume(const TriangleMesh& m) {
+    double volume = 0;
+    for (size_t f = 0; f < m.face_count(); ++f) {
+        const uint32_t* i = &m.indices[3 * f];
+        const Vec3f p0 = m.positions[i[0]], p1 = m.positions[i[1]], p2 = m.positions[i[2]];
+        volume += double(dot(p0, cross(p1, p2)));
+    }
+    return volume / 6;
 }
 
 // Intersection of the line from `from` through `through` with the plane (p0, n).
@@ -171,11 +185,12 @@ SceneEdges::SceneEdges(const Scene& scene) : media(scene_has_media(scene)) {
         if (shape->bsdf && shape->bsdf->flags() == BSDFNull) continue;
         const std::vector<Edge> mesh_edges = discontinuity_edges(shape->mesh);
         const bool closed = std::none_of(mesh_edges.begin(), mesh_edges.end(), [](const Edge& e) { return e.f1 < 0; });
+        const bool inside_out = closed && signed_volume(shape->mesh) < 0;
         const size_t first = edges.size();
         for (const Edge& e : mesh_edges) {
             if (!(norm(shape->mesh.positions[e.v1] - shape->mesh.positions[e.v0]) > 0.f)) continue;
             indices.push_back(uint32_t(edges.size()));
-            edges.push_back({shape.get(), e, closed});
+            edges.push_back({shape.get(), e, closed, inside_out});
         }
         self_shadowing[shape.get()] = can_shadow_itself(edges, first, edges.size());
     }

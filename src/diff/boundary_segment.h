@@ -37,7 +37,8 @@ struct SceneEdges {
     struct SceneEdge {
         const Shape* shape;
         Edge edge;
-        bool closed; // the edge's mesh has no boundary edges (a solid: concave edges never graze a line)
+        bool closed;     // the edge's mesh has no boundary edges (a solid: concave edges never graze a line)
+        bool inside_out; // a closed mesh wound inside out (negative signed volume): its face normals point in
     };
     std::vector<SceneEdge> edges;
     EdgeSet all;

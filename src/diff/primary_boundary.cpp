@@ -167,7 +167,8 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
             if (!shading_jumps(*se.shape, e, textured)) continue;
             // On a solid, creases between faces turned away from the camera are hidden by the solid itself.
             const Vec3f to_eye = parallel ? forward * -1.f : eye - m.positions[e.v0];
-            if (se.closed && !(dot(face_normal(m, e.f0), to_eye) > 0.f)) continue;
+            if (se.closed && !(dot(face_normal(m, e.f0), to_eye) * (se.inside_out ? -1.f : 1.f) > 0.f))
+                continue;
             crease = true;
         }
         const Vec3f p0 = m.positions[e.v0], p1 = m.positions[e.v1];
@@ -219,12 +220,13 @@ SurfaceInteraction3f seen_surface(const Scene& scene, const Ray& ray, bool media
     return scene.intersect(ray);
 }
 
-// Where an edge's image crosses the film at fraction t: the film point s, the image-space normal n from side 1
-// (the edge's own surface) to side 2 (the background of a silhouette, the other face of a crease), and the
-// two sides' primary rays and hits.
+// Where an edge's image crosses the film at fraction t: the film point s, the image-space normal n from side
+// 1 (the edge's own surface) to side 2 (the background of a silhouette, the other face of a crease), and the
+// two sides' primary rays and hits (the edge's own side: its face at the edge point, own_face()).
 struct EdgeCrossing {
     bool valid = false;
     Vec2f s, n;
+    bool crease = false;
     float tau = 0.f; // the edge parameter (v0 → v1) of the 3D point seen at s
     Vec3f x_edge;    // that point
     Ray ray[2];
@@ -243,6 +245,50 @@ float probe_offset(const Sensor& sensor, const Vec3f& x, const Vec2f& s, const V
     return std::clamp(clearance / world_per_pixel, 1e-3f, 0.05f);
 }
 
+// The radiance's limit at the edge on the side of a probe ray: the edge's own face that the ray sees next to
+// the edge, at the edge point (parameter tau) moved into the face by `clearance` (at a crease: a concave
+// crease's other face would otherwise lie within the offsets of the rays leaving it, at a right angle exactly
+// in the offset plane; a silhouette's near side is the limit at the edge itself, where the shading terminator
+// term ends its curves). The face is the one whose plane the ray meets on the face's side of the edge (its
+// apex's barycentric coordinate positive) and, of two such faces (both lie on the near side of a silhouette),
+// the nearer. The probe's own hit may be another face: where a mesh is seen at a grazing angle, the images of
+// several edges fall within the probe offset (the ring edges of a tube seen along its length), and the probe
+// sees a face one or more edges away, whose shading and lighting are not those of the edge's side.
+SurfaceInteraction3f own_face(const Shape& shape, const Edge& e, float tau, const Ray& ray, float clearance) {
+    const TriangleMesh& m = shape.mesh;
+    const Vec3f a = m.positions[e.v0], b = m.positions[e.v1];
+    int32_t seen = -1;
+    float seen_t = Infinity, seen_bary[3] = {0.f, 0.f, 0.f};
+    for (const int32_t f : {e.f0, e.f1}) {
+        if (f < 0) continue;
+        const uint32_t* i = &m.indices[3 * size_t(f)];
+        const Vec3f p0 = m.positions[i[0]], e1 = m.positions[i[1]] - p0, e2 = m.positions[i[2]] - p0;
+        // Möller–Trumbore without the inside test.
+        const Vec3f q = cross(ray.d, e2), o = ray.o - p0, r = cross(o, e1);
+        const float det = dot(e1, q);
+        if (!(std::abs(det) > 0.f)) continue;
+        const float t = dot(e2, r) / det, b1 = dot(o, q) / det, b2 = dot(ray.d, r) / det;
+        const float bary[3] = {1.f - b1 - b2, b1, b2};
+        int apex = 0;
+        for (int k = 0; k < 3; ++k)
+            if (!(m.positions[i[k]] == a) && !(m.positions[i[k]] == b)) apex = k;
+        if (!(t > 0.f) || !(bary[apex] > 0.f) || !(t < seen_t)) continue;
+        // The point's barycentrics in f: w toward the apex (its distance from the edge over the apex's, at
+        // most 1/2), and (1 − w)(1 − tau), (1 − w) tau at (f's copies of) v0 and v1.
+        const float height = norm(cross(m.positions[i[apex]] - a, b - a)) / norm(b - a);
+        const float w = std::min(clearance / height, 0.5f);
+        float at_edge[3];
+        for (int k = 0; k < 3; ++k) {
+            const Vec3f p = m.positions[i[k]];
+            at_edge[k] = k == apex ? w : (1.f - w) * (p == a ? 1.f - tau : tau);
+        }
+        seen = f, seen_t = t;
+        std::copy(at_edge, at_edge + 3, seen_bary);
+    }
+    if (seen < 0) return {};
+    return shape.compute_surface_interaction(ray, seen_t, uint32_t(seen), seen_bary[1], seen_bary[2]);
+}
+
 EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& se, bool media, float t,
                         Sampler& sampler, RayCounter& rays) {
     EdgeCrossing out;
@@ -256,13 +302,14 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
     const Vec3f x_edge = p0 + (p1 - p0) * out.tau;
     out.x_edge = x_edge;
 
-    // The two sides, probed at s ± eps n2. The radiances are the limits at the edge, but rays leaving a probed
-    // point start RayEpsilon-scaled offsets off its surface: a shadow ray toward a light at (or near) the camera
-    // runs back along the probe and, closer to the edge than those offsets, clips the occluder and reports a
-    // false shadow. The probe therefore clears the edge by twice the offset scale of the segment camera–edge
-    // (which bounds the offset of any point behind the edge as seen at the edge's depth), clamped to
-    // [1e-3, 0.05] pixels so that the radiances and velocities stay the limits at the edge up to a small
-    // fraction of a pixel.
+    // The two sides, probed at s ± eps n2. The radiances are the limits at the edge, but rays leaving a
+    // probed point behind the edge start RayEpsilon-scaled offsets off its surface: a shadow ray toward a
+    // light at (or near) the camera runs back along the probe and, closer to the edge than those offsets,
+    // clips the occluder and reports a false shadow. The probe therefore clears the edge by twice the offset
+    // scale of the segment camera–edge (which bounds the offset of any point behind the edge as seen at the
+    // edge's depth), clamped to [1e-3, 0.05] pixels so that the radiances and velocities stay the limits at
+    // the edge up to a small fraction of a pixel. The edge's own side is then evaluated on its face at the
+    // edge point (own_face).
     const float eps = probe_offset(sensor, x_edge, out.s, n2);
     Side sides[2];
     for (int k = 0; k < 2; ++k) {
@@ -271,14 +318,21 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
         sides[k] = classify(out.hit[k], *se.shape, norm(x_edge - out.ray[k].o));
     }
     out.n = n2 * -1.f; // from side 0 (probed at +eps) to side 1
+    out.crease = se.crease;
     if (se.crease) {
-        // A crease is seen where both sides are the edge's own faces at the edge's depth (a convex ridge recedes
-        // on both sides, a valley comes closer), not another part of the same shape hiding it.
+        // A crease is seen where a side is the edge's own surface at the edge's depth (a convex ridge recedes
+        // on both sides, a valley comes closer), not another part of the same shape hiding it. One side
+        // suffices: next to a silhouette seen at a grazing angle the other probe may pass beyond it. Both
+        // sides' radiances are the limits on the edge's two faces.
         const auto at_edge = [&](int k) {
             const float d = norm(x_edge - out.ray[k].o);
             return out.hit[k].is_valid() && out.hit[k].shape == se.shape && std::abs(out.hit[k].t - d) < 0.02f * d;
         };
-        out.valid = at_edge(0) && at_edge(1) && out.hit[0].prim_index != out.hit[1].prim_index;
+        if (!at_edge(0) && !at_edge(1)) return out;
+        for (int k = 0; k < 2; ++k)
+            out.hit[k] = own_face(*se.shape, se.edge, out.tau, out.ray[k], 2.f * ray_offset_scale(x_edge));
+        out.valid =
+            out.hit[0].is_valid() && out.hit[1].is_valid() && out.hit[0].prim_index != out.hit[1].prim_index;
         return out;
     }
     // A silhouette: order the sides so that the first is the edge's own (near) one, n pointing to the other.
@@ -289,7 +343,9 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
         std::swap(sides[0], sides[1]);
         out.n = n2;
     }
-    out.valid = sides[0] == Side::Near && sides[1] == Side::Far;
+    if (sides[0] != Side::Near || sides[1] != Side::Far) return out;
+    out.hit[0] = own_face(*se.shape, se.edge, out.tau, out.ray[0], 0.f);
+    out.valid = out.hit[0].is_valid();
     return out;
 }
 
@@ -323,13 +379,16 @@ ArrivingRadiance far_side(const Scene& scene, const EdgeCrossing& c, const PathS
     return out;
 }
 
-// The jump of the pixel integrand across the edge: L_1 − L_2 with the image-space first vertex; −L_2 in material
-// form, where the edge's own side is the interior term's (its material domain is not cut). Path-traced
-// estimates of the radiance seen on either side; in media the in-scattering in front of the edge, common to both
-// sides, is left out (only the far side beyond the edge's depth, `far`, is estimated; in material form the
-// medium's points in front of the edge are not cut either).
+// The jump of the pixel integrand across the edge: L_1 − L_2 with the image-space first vertex; −L_2 in
+// material form, where the edge's own side is the interior term's (its material domain is not cut).
+// Path-traced estimates of the radiance seen on either side; in media the in-scattering in front of the edge,
+// common to both sides, is left out (only the far side beyond the edge's depth, `far`, is estimated; in
+// material form the medium's points in front of the edge are not cut either). A crease's two sides share
+// their random numbers (light samples, BSDF samples), so that their difference is the jump rather than the
+// noise of two estimates.
 Color3f jump(const Scene& scene, const EdgeCrossing& c, bool image_space, bool media, const PathSettings& settings,
              Sampler& sampler, RayCounter& rays, ArrivingRadiance* far = nullptr) {
+    Sampler shared = sampler;
     Color3f L_2;
     if (media) {
         const ArrivingRadiance f = far_side(scene, c, settings, sampler, rays);
@@ -339,13 +398,16 @@ Color3f jump(const Scene& scene, const EdgeCrossing& c, bool image_space, bool m
         L_2 = trace_path<float>(scene, sampler, c.ray[1], c.hit[1], c.hit[1], ReferenceGeometry{}, settings, rays) * c.weight[1];
     }
     if (!image_space) return L_2 * -1.f;
-    return seen_radiance(scene, c.ray[0], c.hit[0], media, settings, sampler, rays) * c.weight[0] - L_2;
+    return seen_radiance(scene, c.ray[0], c.hit[0], media, settings, c.crease ? shared : sampler, rays) *
+               c.weight[0] -
+           L_2;
 }
 
-// One sample of the shading terminator of a triangle (diff/shading_terminator.h; the image-space first vertex):
-// the curve's points on a line b_k = u of a sweep k (diff/shading_terminator.h), and by the coarea formula
+// One sample of the shading terminator of a triangle (diff/shading_terminator.h; the image-space first
+// vertex): the curve's points on a line b_k = u of a sweep k (diff/shading_terminator.h), and by the coarea
+// formula
 //   ∫_C ΔL v_n dl = ∫ du Σ_points ΔL ∂θG̃ |det ds/db| / |∂G̃/∂w|,   v_n = ∂θG̃ / |∇_s G̃|,
-// with ΔL = L(G̃ > 0) − L(G̃ < 0) probed on either side of the curve's image, |det ds/db| = |ds/dA| |e1 × e2|,
+// with ΔL = L(G̃ > 0) − L(G̃ < 0) the limits on either side of the curve, |det ds/db| = |ds/dA| |e1 × e2|,
 // and ∂θG̃ on the tape at the point where the fixed camera ray through s meets the moving triangle.
 BoundarySample sample_terminator(const Scene& scene, const Silhouettes& sil, const MaterialForm& form, size_t e,
                                  float u, Sampler& sampler, const PathSettings& settings, RayCounter& rays) {
@@ -372,44 +434,26 @@ BoundarySample sample_terminator(const Scene& scene, const Silhouettes& sil, con
         const float sweeps = std::abs(q.dG_db1) + std::abs(q.dG_db2) + std::abs(q.dG_db1 - q.dG_db2);
         if (!sensor.film_position(x, normalize(ng), s, j) || !(sweeps > 0.f)) continue;
         const float ds_dA = j;
-        // The curve's image tangent (the image of its 3D tangent) and the image normal toward G̃ > 0 (the image of
-        // a 3D step along which G̃ grows), from images of small steps.
-        const float step = 1e-3f * (norm(e1) + norm(e2));
-        const Vec3f tangent = e1 * -q.dG_db2 + e2 * q.dG_db1, up = e1 * q.dG_db1 + e2 * q.dG_db2;
-        Vec2f s_t, s_u;
-        if (!sensor.film_position(x + tangent * (step / norm(tangent)), ng, s_t, j) ||
-            !sensor.film_position(x + up * (step / norm(up)), ng, s_u, j))
-            continue;
-        const Vec2f d_t = s_t - s;
-        Vec2f n_s = Vec2f(-d_t.y, d_t.x) / std::sqrt(d_t.x * d_t.x + d_t.y * d_t.y);
-        if (n_s.x * (s_u.x - s.x) + n_s.y * (s_u.y - s.y) < 0.f) n_s = n_s * -1.f;
         // The curve point must be what the camera sees (a terminator on the far side of a solid lies within a few
         // percent of the near side's depth next to its silhouette): the ray through s meets this triangle first.
-        const Ray ray = sensor.sample_ray(s, Vec2f(0.5f)).first;
+        const auto [ray, weight] = sensor.sample_ray(s, Vec2f(0.5f));
         const SurfaceInteraction3f center = seen_surface(scene, ray, sil.media, rays);
         if (!center.is_valid() || center.shape != tt.shape || center.prim_index != tt.prim) continue;
-        // The radiance on either side, 0.01 pixel off the curve: the same surface on both, within 10% of the
-        // curve point's depth (the terminator lies next to silhouettes, where the surface is seen at grazing
-        // angles and 0.01 pixel spans a sizeable depth; a tighter bound there dropped ~10% of the term).
+        // The radiance's limits on either side of the curve, on this triangle: at the curve point moved by
+        // 1e-4 along ±∇G̃ in barycentric coordinates, seen from the camera. Probes through the film next to
+        // the curve would see past the triangle where the dark side is a strip, narrower than their offset,
+        // between the curve and a silhouette (whose near side is the limit at the edge, cross_edge).
+        const float gradient = std::sqrt(sqr(q.dG_db1) + sqr(q.dG_db2));
         Color3f L[2];
-        bool seen = true;
-        for (int side = 0; side < 2 && seen; ++side) {
-            const auto [probe, weight] = sensor.sample_ray(s + n_s * (side == 0 ? 0.01f : -0.01f), sampler.next_2d());
-            const SurfaceInteraction3f hit = seen_surface(scene, probe, sil.media, rays);
-            seen = hit.is_valid() && hit.shape == tt.shape && std::abs(hit.t - center.t) < 0.1f * center.t;
-            if (seen)
-                L[side] = seen_radiance(scene, probe, hit, sil.media, settings, sampler, rays) * weight;
+        for (int side = 0; side < 2; ++side) {
+            const float shift = (side == 0 ? 1e-4f : -1e-4f) / gradient;
+            const float b1 = q.bary.x + q.dG_db1 * shift, b2 = q.bary.y + q.dG_db2 * shift;
+            const Vec3f y = p0 + e1 * b1 + e2 * b2;
+            const Ray probe(ray.o, normalize(y - ray.o));
+            const SurfaceInteraction3f hit =
+                tt.shape->compute_surface_interaction(probe, norm(y - ray.o), tt.prim, b1, b2);
+            L[side] = seen_radiance(scene, probe, hit, sil.media, settings, sampler, rays) * weight;
         }
-        if (!seen) continue;
-        // Next to a silhouette the primary term probes its near side probe_offset() inside: where the terminator's
-        // dark side is narrower than that, the silhouette's jump already counts the strip as lit, and the curve
-        // is left to it (a dark strip of that width between two terminator branches moves as one, its two
-        // curves' terms cancelling).
-        const SurfaceInteraction3f dark =
-            seen_surface(scene, sensor.sample_ray(s - n_s * probe_offset(sensor, x, s, n_s), Vec2f(0.5f)).first, sil.media, rays);
-        if (!(dark.is_valid() && dark.shape == tt.shape && std::abs(dark.t - center.t) < 0.1f * center.t &&
-              dot(dark.sh_frame.n, eye - dark.p) < 0.f))
-            continue;
         // G̃ = n_s · (c − x) on the tape, at the fixed ray through s.
         const SurfaceInteraction3f hit =
             tt.shape->compute_surface_interaction(ray, norm(x - ray.o), tt.prim, q.bary.x, q.bary.y);
