@@ -36,12 +36,17 @@ struct WasCase {
 // The boundary validation scenes with the lights warped-area sampling sees (area lights and the
 // environment; the shadows of point and directional lights are outside paper 004, diff/warped_area.h), at
 // 16 × 16 with 1024 samples per pixel (16 batches of 64: the estimator's tails are heavy, and batches of a
-// few samples understate its standard errors). Steps as the psdr tests' (tests/test_diff_boundary.cpp); the camera motion with a Gaussian filter
-// (a box filter's pixel edges are refused).
+// few samples understate its standard errors). Steps as the psdr tests' (tests/test_diff_boundary.cpp); the
+// camera motion with a Gaussian filter (a box filter's pixel edges are refused).
 const std::vector<WasCase> cases = {
     {"silhouette", "silhouette.xml", {}, "box.rotate=0,1,0", 1e-2, 1024},
     {"shadow", "shadow.xml", {{"light", "area"}}, "occluder.translate=1,0,0", 2e-2, 2048},
-    {"sky", "shadow.xml", {{"light", "sky"}, {"occluder_height", "0.6"}}, "occluder.translate=1,0,0", 1e-2, 2048},
+    {"sky",
+     "shadow.xml",
+     {{"light", "sky"}, {"occluder_height", "0.6"}},
+     "occluder.translate=1,0,0",
+     1e-2,
+     2048},
     {"glossy_shadow", "glossy_shadow.xml", {{"light", "area"}}, "cube.translate=1,0,0", 2e-2, 1024},
     {"self_shadow", "self_shadow.xml", {{"light", "area"}}, "lshape.rotate=0,1,0", 1e-2, 1024},
     {"moving_light", "moving_light.xml", {}, "lamp.translate=1,0,0", 2e-2, 1024},
@@ -65,7 +70,8 @@ Loaded load(const WasCase& c, int res = Res) {
     return l;
 }
 
-MethodDerivative was(const Loaded& l, int spp, const std::map<std::string, std::string>& given, uint64_t seed) {
+MethodDerivative was(const Loaded& l, int spp, const std::map<std::string, std::string>& given,
+                     uint64_t seed) {
     MethodOptions o;
     for (const auto& [k, v] : given)
         o.set(k, v);
@@ -85,10 +91,13 @@ class WasBoundaryScenes : public testing::TestWithParam<WasCase> {};
 // silhouette (a rotating cube under a point light at the camera) relerr4 0.24 against a noise expectation of
 // 0.06, z +5.5 at N' = 32 (0.17 / 0.09, z +3.3 at N' = 64; 0.14, z +2.9 at N' = 128: it converges slowly);
 // camera (the camera translating, every pixel's content crossing the film's edge band where the field must
-// vanish) relerr4 0.39 against 0.18, z −6.3 (at 32 × 32, where the band is a smaller share: 0.12 against 0.13).
+// vanish) relerr4 0.39 against 0.18, z −6.3 (at 32 × 32, where the band is a smaller share: 0.12 against
+// 0.13).
 const char* consistent_bias(const std::string& label) {
-    if (label == "silhouette") return "the consistent estimator converges slowly in N' on the rotating cube's silhouette";
-    if (label == "camera") return "the consistent estimator is biased in the film's edge band under camera motion";
+    if (label == "silhouette")
+        return "the consistent estimator converges slowly in N' on the rotating cube's silhouette";
+    if (label == "camera")
+        return "the consistent estimator is biased in the film's edge band under camera motion";
     return nullptr;
 }
 
@@ -124,8 +133,8 @@ TEST(WasUnbiased, MatchesFiniteDifferences) {
         const FiniteDifference fd = finite_difference(*l.scene, *l.params, c.h, ro, 16);
         const MethodDerivative d = was(l, 2 * Spp, {{"was-unbiased", "true"}}, 5 + 1000 * seed);
         const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
-        std::printf("  %s (%s), %d spp in %.1f s: %s\n", c.label.c_str(), d.description.c_str(), 2 * Spp, d.seconds,
-                    describe(check).c_str());
+        std::printf("  %s (%s), %d spp in %.1f s: %s\n", c.label.c_str(), d.description.c_str(), 2 * Spp,
+                    d.seconds, describe(check).c_str());
         EXPECT_TRUE(check.passes()) << c.label << ": " << describe(check);
     }
 }
@@ -187,10 +196,11 @@ TEST(WasVarianceReduction, ControlVariateOnTheFlatEmitter) {
     for (const int tilt : {0, 40}) {
         const MethodDerivative with = flat_derivative(tilt, {});
         const MethodDerivative without = flat_derivative(tilt, {{"no-control-variate", "true"}});
-        const double v_with = mean_variance(with.stderr_img, 2), v_without = mean_variance(without.stderr_img, 2);
+        const double v_with = mean_variance(with.stderr_img, 2),
+                     v_without = mean_variance(without.stderr_img, 2);
         const Comparison zero = compare_images(with.derivative, Image(16, 16), with.stderr_img);
-        std::printf("  tilt %d: variance %.5f with the control variate, %.5f without; mean %.5f (z %.2f)\n", tilt,
-                    v_with, v_without, zero.mean_test, zero.mean_z);
+        std::printf("  tilt %d: variance %.5f with the control variate, %.5f without; mean %.5f (z %.2f)\n",
+                    tilt, v_with, v_without, zero.mean_test, zero.mean_z);
         EXPECT_LT(v_with, 0.05 * v_without);
         EXPECT_LT(std::abs(zero.mean_z), 4.0);
     }
@@ -261,7 +271,8 @@ TEST(WasErrors, BoxFilterAndMediaAreRefused) {
       <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/>
         <integer name="height" value="4"/><rfilter type="box"/></film></sensor>
       <shape type="rectangle" id="plane"><bsdf type="diffuse"/></shape><emitter type="constant"/>
-    </scene>)", "plane.translate=1,0,0");
+    </scene>)",
+                                    "plane.translate=1,0,0");
     EXPECT_NE(box.find("reconstruction filter"), std::string::npos) << box;
     EXPECT_NE(box.find("gaussian"), std::string::npos) << box;
     const std::string media = message(R"(<scene version="3.0.0">
@@ -269,7 +280,8 @@ TEST(WasErrors, BoxFilterAndMediaAreRefused) {
       <sensor type="perspective"><ref name="medium" id="fog"/>
         <film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
       <shape type="rectangle" id="plane"><bsdf type="diffuse"/></shape><emitter type="constant"/>
-    </scene>)", "plane.translate=1,0,0");
+    </scene>)",
+                                      "plane.translate=1,0,0");
     EXPECT_NE(media.find("participating media"), std::string::npos) << media;
 }
 

@@ -45,15 +45,15 @@ struct WasContext {
     BoundaryTest boundary;
     WarpOptions warp;
     PathSettings settings;
-    float sigma;    // the film auxiliary distribution's standard deviation (pixels): the filter's
-    Vec3f camera;   // the center of projection
-    bool film_edge; // the film's edge cuts the filters (no sample_border): a static discontinuity
+    float sigma;      // the film auxiliary distribution's standard deviation (pixels): the filter's
+    Vec3f camera;     // the center of projection
+    bool film_edge;   // the film's edge cuts the filters (no sample_border): a static discontinuity
     float film_scale; // the boundary test's distance scale on the film: (pixels per radian)² / σ²
 
     WasContext(const Scene& s, const Parameters& p, const WasOptions& o)
         : scene(s), params(p), form(s, p, FirstVertex::Material), boundary(s), warp(o.warp), settings(o.path),
-          sigma(filter_sigma(*s.sensor->film->rfilter)),
-          camera(s.sensor->to_world.apply_point(Vec3f(0.f))), film_edge(!s.sensor->film->sample_border) {
+          sigma(filter_sigma(*s.sensor->film->rfilter)), camera(s.sensor->to_world.apply_point(Vec3f(0.f))),
+          film_edge(!s.sensor->film->sample_border) {
         // Pixels per radian at the film's center.
         const Film& film = *s.sensor->film;
         const Vec2f center(0.5f * float(film.width), 0.5f * float(film.height));
@@ -90,14 +90,15 @@ Color3<Var> environment(const WasContext& c, const Vec3f& d, const Vec3<Var>& wa
 // rays.
 WarpEstimate warp_at(const WasContext& c, const SurfaceInteraction3f& hit, const SurfaceInteraction<Var>& si,
                      const Vec3f& omega, AuxiliaryRng& rng, RayCounter& rays) {
-    const WarpEstimate e = estimate_warp_at(c.scene, c.form, c.boundary, WarpVertex{hit, si.p}, omega, c.warp, rng);
+    const WarpEstimate e =
+        estimate_warp_at(c.scene, c.form, c.boundary, WarpVertex{hit, si.p}, omega, c.warp, rng);
     rays.rays += uint64_t(c.warp.unbiased ? c.warp.rr_batch : c.warp.aux_count);
     return e;
 }
 
 // Next-event estimation at x in solid angle: f_s(ω(θ)) L_e(y(θ) → x) J / p_σ, with y(θ) where the warped ray
-// meets the moving emitter (area lights) or the environment along ω(θ). Delta lights are connected in material
-// form (the light's position and x as they move; their shadows' motion is not seen, header).
+// meets the moving emitter (area lights) or the environment along ω(θ). Delta lights are connected in
+// material form (the light's position and x as they move; their shadows' motion is not seen, header).
 Color3<Var> next_event(const WasContext& c, const BSDF* bsdf, const SurfaceInteraction3f& hit,
                        const SurfaceInteraction<Var>& si, const DirectionSample3f& ds, AuxiliaryRng& rng,
                        RayCounter& rays) {
@@ -106,7 +107,8 @@ Color3<Var> next_event(const WasContext& c, const BSDF* bsdf, const SurfaceInter
     const WarpEstimate e = warp_at(c, hit, si, ds.d, rng, rays);
     const Color3<Var> f = bsdf->eval(ctx, si, si.to_local(e.direction)) * (e.jacobian / Var(ds.pdf));
     if (const Shape* shape = ds.emitter->shape()) {
-        const SurfaceInteraction3f light = surface_interaction<float>(*shape, ds.prim, ds.bary, MeshVertices{shape->mesh});
+        const SurfaceInteraction3f light =
+            surface_interaction<float>(*shape, ds.prim, ds.bary, MeshVertices{shape->mesh});
         SurfaceInteraction<Var> y = warped_vertex(c.params, light, si.p, e.direction);
         y.wi = y.to_local(-e.direction);
         return f * ds.emitter->eval(y);
@@ -135,11 +137,12 @@ Color3<Var> warped_path(const WasContext& c, Sampler& sampler, AuxiliaryRng& rng
 
     for (unsigned depth = 0;; ++depth) {
         if (!(depth == 0 && settings.hide_emitters))
-            for_each_emitter_hit(c.scene, prev_hit, ray.d, hit, [&](const Emitter* e, const Color3f&, float pdf) {
-                const float w = prev_bsdf_delta ? 1.f : mis_power(prev_bsdf_pdf, pdf);
-                const Color3<Var> Le = hit.is_valid() ? e->eval(si) : environment(c, ray.d, direction);
-                L += throughput * Le * Var(w);
-            });
+            for_each_emitter_hit(
+                c.scene, prev_hit, ray.d, hit, [&](const Emitter* e, const Color3f&, float pdf) {
+                    const float w = prev_bsdf_delta ? 1.f : mis_power(prev_bsdf_pdf, pdf);
+                    const Color3<Var> Le = hit.is_valid() ? e->eval(si) : environment(c, ray.d, direction);
+                    L += throughput * Le * Var(w);
+                });
         if (!hit.is_valid() || depth + 1 >= max_depth) break;
         const BSDF* bsdf = hit.bsdf();
         if (!bsdf) break;
@@ -164,7 +167,8 @@ Color3<Var> warped_path(const WasContext& c, Sampler& sampler, AuxiliaryRng& rng
         const SurfaceInteraction3f next = c.scene.intersect(ray);
         const bool delta = (bs.sampled_type & BSDFDelta) != 0;
         if (delta) {
-            // No integral over directions at a delta lobe (no derivative flows through it, as the interior term).
+            // No integral over directions at a delta lobe (no derivative flows through it, as the interior
+            // term).
             direction = Vec3<Var>(d);
             throughput *= Color3<Var>(weight);
         } else {
@@ -195,8 +199,8 @@ Color3<Var> warped_path(const WasContext& c, Sampler& sampler, AuxiliaryRng& rng
 }
 
 // The film auxiliary sample at position `x` (Algorithm 2 on the film, §3.3): the boundary test of the point
-// seen through x and its film motion ∂θ s(y(θ)) (the direct warp). Beyond a cutting film edge the filters end:
-// a static discontinuity, no motion there and B the distance to the edge.
+// seen through x and its film motion ∂θ s(y(θ)) (the direct warp). Beyond a cutting film edge the filters
+// end: a static discontinuity, no motion there and B the distance to the edge.
 void film_auxiliary(const WasContext& c, const Vec2f& x, const Vec2f& aperture, PixelAuxiliarySample& a,
                     RayCounter& rays) {
     const Sensor& sensor = *c.scene.sensor;
@@ -206,7 +210,8 @@ void film_auxiliary(const WasContext& c, const Vec2f& x, const Vec2f& aperture, 
         // B = D(x', the film's edge) (diff/boundary_test.h's distance term, in the film's metric).
         const float dx = std::max({-x.x, x.x - float(film.width), 0.f});
         const float dy = std::max({-x.y, x.y - float(film.height), 0.f});
-        a.boundary = float(std::expm1(std::min(0.5 * double(dx * dx + dy * dy) / double(c.sigma * c.sigma), 80.0)));
+        a.boundary =
+            float(std::expm1(std::min(0.5 * double(dx * dx + dy * dy) / double(c.sigma * c.sigma), 80.0)));
         return;
     }
     const Ray ray = sensor.sample_ray(x, aperture).first;
@@ -214,8 +219,8 @@ void film_auxiliary(const WasContext& c, const Vec2f& x, const Vec2f& aperture, 
     const SurfaceInteraction3f hit = c.scene.intersect(ray);
     a.boundary = c.boundary(hit, ray.o, ray.d, c.film_scale);
     // An escaped ray sees a direction: a far point moves on the film only with the camera's rotation.
-    const Vec3<Var> y =
-        hit.is_valid() ? auxiliary_point(c.form, c.boundary, hit, ray.o, ray.d) : Vec3<Var>(ray.o + ray.d * 1e4f);
+    const Vec3<Var> y = hit.is_valid() ? auxiliary_point(c.form, c.boundary, hit, ray.o, ray.d)
+                                       : Vec3<Var>(ray.o + ray.d * 1e4f);
     const Vec3<Var> p = c.form.to_reference_camera(y, c.camera);
     if (p.x.is_constant() && p.y.is_constant() && p.z.is_constant()) return;
     Vec2<Var> s;
@@ -227,7 +232,9 @@ void film_auxiliary(const WasContext& c, const Vec2f& x, const Vec2f& aperture, 
 // ∂ω/∂x of the camera ray's direction at film position x (central differences; the direction is smooth).
 std::pair<Vec3f, Vec3f> direction_gradient(const Sensor& sensor, const Vec2f& x, const Vec2f& aperture) {
     constexpr float h = 1e-2f;
-    const auto d = [&](float dx, float dy) { return sensor.sample_ray(Vec2f(x.x + dx, x.y + dy), aperture).first.d; };
+    const auto d = [&](float dx, float dy) {
+        return sensor.sample_ray(Vec2f(x.x + dx, x.y + dy), aperture).first.d;
+    };
     return {(d(h, 0.f) - d(-h, 0.f)) * (0.5f / h), (d(0.f, h) - d(0.f, -h)) * (0.5f / h)};
 }
 
@@ -279,7 +286,9 @@ CameraSample camera_sample(const WasContext& c, Sampler& sampler, AuxiliaryRng& 
     return out;
 }
 
-bool finite(const Color3<Var>& v) { return std::isfinite(v.x.v) && std::isfinite(v.y.v) && std::isfinite(v.z.v); }
+bool finite(const Color3<Var>& v) {
+    return std::isfinite(v.x.v) && std::isfinite(v.y.v) && std::isfinite(v.z.v);
+}
 float tangent_of(const Var& v, const std::vector<float>& tangent) { return v.id < 0 ? 0.f : tangent[v.id]; }
 
 // The linear model of Appendix D fitted to a pixel's previous samples: least squares of y ≈ μ_y + ∇y · x for
@@ -289,8 +298,10 @@ class PixelLinearModel {
     void add(const Vec2f& x, const Color3f& g, const Vec2f& v) {
         const double row[3] = {1.0, x.x, x.y}, y[5] = {g.x, g.y, g.z, v.x, v.y};
         for (int i = 0; i < 3; ++i) {
-            for (int j = 0; j < 3; ++j) xtx_[i][j] += row[i] * row[j];
-            for (int k = 0; k < 5; ++k) xty_[i][k] += row[i] * y[k];
+            for (int j = 0; j < 3; ++j)
+                xtx_[i][j] += row[i] * row[j];
+            for (int k = 0; k < 5; ++k)
+                xty_[i][k] += row[i] * y[k];
         }
         ++n_;
     }
@@ -313,8 +324,10 @@ class PixelLinearModel {
     bool solve(double (&beta)[3][5]) const {
         double a[3][8];
         for (int i = 0; i < 3; ++i) {
-            for (int j = 0; j < 3; ++j) a[i][j] = xtx_[i][j];
-            for (int k = 0; k < 5; ++k) a[i][3 + k] = xty_[i][k];
+            for (int j = 0; j < 3; ++j)
+                a[i][j] = xtx_[i][j];
+            for (int k = 0; k < 5; ++k)
+                a[i][3 + k] = xty_[i][k];
         }
         for (int col = 0; col < 3; ++col) {
             int pivot = col;
@@ -325,11 +338,13 @@ class PixelLinearModel {
             for (int r = 0; r < 3; ++r) {
                 if (r == col) continue;
                 const double f = a[r][col] / a[col][col];
-                for (int j = col; j < 8; ++j) a[r][j] -= f * a[col][j];
+                for (int j = col; j < 8; ++j)
+                    a[r][j] -= f * a[col][j];
             }
         }
         for (int i = 0; i < 3; ++i)
-            for (int k = 0; k < 5; ++k) beta[i][k] = a[i][3 + k] / a[i][i];
+            for (int k = 0; k < 5; ++k)
+                beta[i][k] = a[i][3 + k] / a[i][i];
         return true;
     }
 
@@ -360,63 +375,68 @@ struct PixelSums {
     Image primal, derivative;
 };
 
-// One batch of the forward-mode estimator. The control variate of each pixel sample is the linear model fitted
-// to the pixel's previous samples, or until it has enough of them, the previous pixel's of the tile (samples
-// independent of the current one either way, so the control's known mean holds given them; tiles do not depend
-// on the thread count).
+// One batch of the forward-mode estimator. The control variate of each pixel sample is the linear model
+// fitted to the pixel's previous samples, or until it has enough of them, the previous pixel's of the tile
+// (samples independent of the current one either way, so the control's known mean holds given them; tiles do
+// not depend on the thread count).
 PixelSums forward_batch(const WasContext& c, const WasOptions& options, uint64_t seed,
                         const std::function<void(float)>& progress, SharedSampleCost& cost) {
     const Film& film = *c.scene.sensor->film;
     PixelSums out{Image(film.width, film.height), Image(film.width, film.height)};
     const float r = film.rfilter->radius();
-    for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
-        Sampler sampler(*c.scene.sensor->sampler, options.spp);
-        RayCounter rays;
-        uint64_t tape_nodes = 0;
-        std::vector<float> tangent;
-        Tape& tape = Tape::current();
-        PixelLinearModel previous;
-        for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x) {
-                check_interrupt();
-                const uint64_t pixel = uint64_t(y) * film.width + x;
-                // The control variate needs the sampling density's score to integrate to zero: pixels whose
-                // filter the film's edge cuts are left without it.
-                const bool control = options.control_variate &&
-                                     (!c.film_edge || (x + 0.5f >= r && y + 0.5f >= r &&
-                                                       film.width - x - 0.5f >= r && film.height - y - 0.5f >= r));
-                PixelLinearModel model;
-                Vec3d primal(0.0), derivative(0.0);
-                for (int m = 0; m < options.spp; ++m) {
-                    sampler.start(seed, pixel, uint64_t(m));
-                    AuxiliaryRng rng(seed, pixel, uint64_t(m));
-                    tape.clear();
-                    const CameraSample s = camera_sample(c, sampler, rng, x, y, rays);
-                    tape_nodes += tape.size();
-                    if (!finite(s.value)) continue;
-                    tape.forward(c.params.direction().data(), tangent);
-                    const Color3f value(s.value.x.v, s.value.y.v, s.value.z.v);
-                    Vec3d d(tangent_of(s.value.x, tangent), tangent_of(s.value.y, tangent),
-                            tangent_of(s.value.z, tangent));
-                    if (control) {
-                        const Vec2f v(tangent_of(s.position.x, tangent), tangent_of(s.position.y, tangent));
-                        const Vec2f ratio = filter_gradient_ratio(film, x, y, s.offset, s.pdf);
-                        LinearControlVariate cv;
-                        const PixelLinearModel& fitted = model.ready() ? model : previous;
-                        for (int ch = 0; ch < 3; ++ch)
-                            if (fitted.fit(ch, cv)) d[ch] += control_correction(cv, s.offset, ratio);
-                        if (std::isfinite(v.x) && std::isfinite(v.y)) model.add(s.offset, s.radiance, v);
+    for_each_tile(
+        film.width, film.height, options.threads,
+        [&](int x0, int y0, int x1, int y1) {
+            Sampler sampler(*c.scene.sensor->sampler, options.spp);
+            RayCounter rays;
+            uint64_t tape_nodes = 0;
+            std::vector<float> tangent;
+            Tape& tape = Tape::current();
+            PixelLinearModel previous;
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    check_interrupt();
+                    const uint64_t pixel = uint64_t(y) * film.width + x;
+                    // The control variate needs the sampling density's score to integrate to zero: pixels
+                    // whose filter the film's edge cuts are left without it.
+                    const bool control =
+                        options.control_variate &&
+                        (!c.film_edge || (x + 0.5f >= r && y + 0.5f >= r && film.width - x - 0.5f >= r &&
+                                          film.height - y - 0.5f >= r));
+                    PixelLinearModel model;
+                    Vec3d primal(0.0), derivative(0.0);
+                    for (int m = 0; m < options.spp; ++m) {
+                        sampler.start(seed, pixel, uint64_t(m));
+                        AuxiliaryRng rng(seed, pixel, uint64_t(m));
+                        tape.clear();
+                        const CameraSample s = camera_sample(c, sampler, rng, x, y, rays);
+                        tape_nodes += tape.size();
+                        if (!finite(s.value)) continue;
+                        tape.forward(c.params.direction().data(), tangent);
+                        const Color3f value(s.value.x.v, s.value.y.v, s.value.z.v);
+                        Vec3d d(tangent_of(s.value.x, tangent), tangent_of(s.value.y, tangent),
+                                tangent_of(s.value.z, tangent));
+                        if (control) {
+                            const Vec2f v(tangent_of(s.position.x, tangent),
+                                          tangent_of(s.position.y, tangent));
+                            const Vec2f ratio = filter_gradient_ratio(film, x, y, s.offset, s.pdf);
+                            LinearControlVariate cv;
+                            const PixelLinearModel& fitted = model.ready() ? model : previous;
+                            for (int ch = 0; ch < 3; ++ch)
+                                if (fitted.fit(ch, cv)) d[ch] += control_correction(cv, s.offset, ratio);
+                            if (std::isfinite(v.x) && std::isfinite(v.y)) model.add(s.offset, s.radiance, v);
+                        }
+                        primal += Vec3d(value.x, value.y, value.z);
+                        if (is_finite(Vec3f(d))) derivative += d;
                     }
-                    primal += Vec3d(value.x, value.y, value.z);
-                    if (is_finite(Vec3f(d))) derivative += d;
+                    if (model.ready()) previous = model;
+                    out.primal.at(x, y) = Color3f(primal / double(options.spp));
+                    out.derivative.at(x, y) = Color3f(derivative / double(options.spp));
                 }
-                if (model.ready()) previous = model;
-                out.primal.at(x, y) = Color3f(primal / double(options.spp));
-                out.derivative.at(x, y) = Color3f(derivative / double(options.spp));
-            }
-        tape.clear();
-        cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays.rays, tape_nodes});
-    }, progress);
+            tape.clear();
+            cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays.rays, tape_nodes});
+        },
+        progress);
     return out;
 }
 
@@ -426,15 +446,19 @@ void require_was_support(const Scene& scene, const Parameters& params) {
     if (params.dimension() == 0) throw Error("no parameter is enabled for differentiation");
     if (!scene.sensor || !scene.sensor->film) throw Error("the scene has no sensor");
     if (scene_has_media(scene))
-        throw Error("method was (paper 004) differentiates surfaces only and the scene has participating media: "
-                    "use the psdr method (the default)");
+        throw Error(
+            "method was (paper 004) differentiates surfaces only and the scene has participating media: "
+            "use the psdr method (the default)");
     if (!scene.sensor->projects_points())
-        throw Error("method was warps the film: it needs a sensor with one center of projection (perspective, "
-                    "orthographic, thinlens with aperture 0)");
+        throw Error(
+            "method was warps the film: it needs a sensor with one center of projection (perspective, "
+            "orthographic, thinlens with aperture 0)");
     const ReconstructionFilter& f = *scene.sensor->film->rfilter;
     if (f.eval(0.999f * f.radius()) > 0.05f * f.eval(0.f))
         throw Error("method was needs a reconstruction filter that falls continuously to zero (its film warp "
-                    "would move the jumps of '" + f.to_string() + "' at pixel edges): use <rfilter type=\"gaussian\"/> "
+                    "would move the jumps of '" +
+                    f.to_string() +
+                    "' at pixel edges): use <rfilter type=\"gaussian\"/> "
                     "(Mitsuba's default) or tent, or the psdr method");
 }
 
@@ -472,50 +496,56 @@ Gradient was_gradient(const Scene& scene, const Parameters& params, const Image&
     const auto start = std::chrono::steady_clock::now();
     const WasContext c(scene, params, options);
     const size_t dim = size_t(params.dimension());
-    tbb::enumerable_thread_specific<std::vector<double>> gradients([dim] { return std::vector<double>(dim, 0.0); });
+    tbb::enumerable_thread_specific<std::vector<double>> gradients(
+        [dim] { return std::vector<double>(dim, 0.0); });
     Gradient result{std::vector<double>(dim, 0.0), {}, Image(film.width, film.height), 0.0, {}};
     for (const auto& e : scene.emitters)
         if (e->is_delta() && !e->is_infinite()) {
-            result.warnings.push_back("method was does not see the motion of shadows cast from point and spot lights");
+            result.warnings.push_back(
+                "method was does not see the motion of shadows cast from point and spot lights");
             break;
         }
     const float inv_spp = 1.f / float(options.spp);
     SharedSampleCost cost;
-    for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
-        Sampler sampler(*scene.sensor->sampler, options.spp);
-        RayCounter rays;
-        uint64_t tape_nodes = 0;
-        std::vector<float> scratch;
-        std::vector<std::pair<int32_t, float>> seeds(3);
-        std::vector<double>& gradient = gradients.local();
-        Tape& tape = Tape::current();
-        for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x) {
-                check_interrupt();
-                const uint64_t pixel = uint64_t(y) * film.width + x;
-                const Color3f a = adjoint.at(x, y) * inv_spp;
-                Vec3d primal(0.0);
-                for (int m = 0; m < options.spp; ++m) {
-                    sampler.start(options.seed, pixel, uint64_t(m));
-                    AuxiliaryRng rng(options.seed, pixel, uint64_t(m));
-                    tape.clear();
-                    const CameraSample s = camera_sample(c, sampler, rng, x, y, rays);
-                    tape_nodes += tape.size();
-                    if (!finite(s.value)) continue;
-                    primal += Vec3d(s.value.x.v, s.value.y.v, s.value.z.v);
-                    seeds[0] = {s.value.x.id, a.x};
-                    seeds[1] = {s.value.y.id, a.y};
-                    seeds[2] = {s.value.z.id, a.z};
-                    tape.backward(seeds, gradient.data(), scratch);
+    for_each_tile(
+        film.width, film.height, options.threads,
+        [&](int x0, int y0, int x1, int y1) {
+            Sampler sampler(*scene.sensor->sampler, options.spp);
+            RayCounter rays;
+            uint64_t tape_nodes = 0;
+            std::vector<float> scratch;
+            std::vector<std::pair<int32_t, float>> seeds(3);
+            std::vector<double>& gradient = gradients.local();
+            Tape& tape = Tape::current();
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    check_interrupt();
+                    const uint64_t pixel = uint64_t(y) * film.width + x;
+                    const Color3f a = adjoint.at(x, y) * inv_spp;
+                    Vec3d primal(0.0);
+                    for (int m = 0; m < options.spp; ++m) {
+                        sampler.start(options.seed, pixel, uint64_t(m));
+                        AuxiliaryRng rng(options.seed, pixel, uint64_t(m));
+                        tape.clear();
+                        const CameraSample s = camera_sample(c, sampler, rng, x, y, rays);
+                        tape_nodes += tape.size();
+                        if (!finite(s.value)) continue;
+                        primal += Vec3d(s.value.x.v, s.value.y.v, s.value.z.v);
+                        seeds[0] = {s.value.x.id, a.x};
+                        seeds[1] = {s.value.y.id, a.y};
+                        seeds[2] = {s.value.z.id, a.z};
+                        tape.backward(seeds, gradient.data(), scratch);
+                    }
+                    result.primal.at(x, y) = Color3f(primal / double(options.spp));
                 }
-                result.primal.at(x, y) = Color3f(primal / double(options.spp));
-            }
-        tape.clear();
-        cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays.rays, tape_nodes});
-    }, options.progress);
+            tape.clear();
+            cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays.rays, tape_nodes});
+        },
+        options.progress);
     result.cost = cost.get();
     for (const std::vector<double>& g : gradients)
-        for (size_t k = 0; k < dim; ++k) result.values[k] += g[k];
+        for (size_t k = 0; k < dim; ++k)
+            result.values[k] += g[k];
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
 }

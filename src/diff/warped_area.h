@@ -25,14 +25,12 @@
 namespace penumbra {
 
 struct WasOptions {
-    // κ, N', antithetic, unbiased (diff/warp_field.h). Defaults by measurement (docs/warped-area-sampling.md):
-    // N' = 32 (the paper's 8 leaves the consistent estimator biased by 15–50% of the boundary derivative on
-    // the validation scenes) and κ = 1e5 (redner's and Mitsuba 3's; the paper's 1e4 leaves the shadow under
-    // an area light biased, z +1 to +5, and the corkscrew's, as the paper found for its OPTIM-CORKSCREW).
+    // κ, N', antithetic, unbiased (diff/warp_field.h). κ = 1e4 (the paper's); N' = 32 by measurement (the
+    // paper's 8 leaves the consistent estimator biased by 15–50% of the boundary derivative on the validation
+    // scenes, docs/warped-area-sampling.md).
     WarpOptions warp = [] {
         WarpOptions o;
         o.aux_count = 32;
-        o.weight.kappa = 1e5f;
         return o;
     }();
     bool control_variate = true; // Appendix D at the camera vertex (forward mode)

@@ -69,23 +69,31 @@ class WasMethod final : public DerivativeMethod {
 
 MethodInfo was_method_info() {
     using Type = MethodOption::Type;
-    return {"was",
-            "warped-area sampling of paper 004: boundary derivatives from auxiliary rays at every path vertex, "
-            "no edge sampling (surfaces, continuous pixel filters)",
-            {{"was-unbiased",
-              Type::Bool,
-              "Russian-roulette debiasing of the warp's normalization (Algorithm 3) instead of a fixed N'",
-              {}},
-             {"was-aux", Type::Int, "auxiliary rays per warped direction N' (default 32; the paper's 8 is biased, docs/warped-area-sampling.md)", {}, 2, 4096},
-             {"was-kappa",
-              Type::Float,
-              "concentration of the vMF auxiliary rays and of the harmonic weights' distance (default 1e5; the paper's 1e4 is biased on shadows)",
-              {},
-              1.0,
-              1e8},
-             {"no-antithetic", Type::Bool, "independent auxiliary samples instead of antithetic pairs", {}},
-             {"no-control-variate", Type::Bool, "no control variate for the pixel filter's gradient term", {}}},
-            [](const MethodOptions& o) { return std::make_unique<WasMethod>(o); }};
+    return {
+        "was",
+        "warped-area sampling of paper 004: boundary derivatives from auxiliary rays at every path vertex, "
+        "no edge sampling (surfaces, continuous pixel filters)",
+        {{"was-unbiased",
+          Type::Bool,
+          "Russian-roulette debiasing of the warp's normalization (Algorithm 3) instead of a fixed N'",
+          {}},
+         {"was-aux",
+          Type::Int,
+          "auxiliary rays per warped direction N' (default 32; the paper's 8 is biased, "
+          "docs/warped-area-sampling.md)",
+          {},
+          2,
+          4096},
+         {"was-kappa",
+          Type::Float,
+          "concentration of the vMF auxiliary rays and of the harmonic weights' distance (default 1e4, the "
+          "paper's; larger: less bias, heavier tails)",
+          {},
+          1.0,
+          1e8},
+         {"no-antithetic", Type::Bool, "independent auxiliary samples instead of antithetic pairs", {}},
+         {"no-control-variate", Type::Bool, "no control variate for the pixel filter's gradient term", {}}},
+        [](const MethodOptions& o) { return std::make_unique<WasMethod>(o); }};
 }
 
 } // namespace penumbra
