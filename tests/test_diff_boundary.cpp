@@ -351,3 +351,33 @@ TEST(PixelBoundary, OppositeEdgesCancelSampleBySample) {
     std::printf("  pixel-boundary term at 64 spp: relative noise %.4f\n", noise.noise_relerr);
     EXPECT_LT(noise.noise_relerr, 0.1);
 }
+
+// With max_depth 1 the image holds directly visible emitters only: no shadow, so the direct term (which splats
+// shadow edges' jumps) must be exactly zero. It used to splat the occluder's shadow from the small light anyway
+// (a cube before an emitting backdrop: relerr4 0.09 against a noise expectation of 0.005, z +13).
+TEST(DirectBoundary, NothingAtMaxDepthOne) {
+    auto scene = load_scene_string(R"(<scene version="3.0.0">
+      <integrator type="path"><integer name="max_depth" value="1"/></integrator>
+      <sensor type="perspective"><float name="fov" value="35"/>
+        <transform name="to_world"><lookat origin="0,0.4,4" target="0,0,0" up="0,1,0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film></sensor>
+      <shape type="rectangle" id="backdrop"><transform name="to_world"><scale value="4"/>
+        <translate value="0,0,-1.2"/></transform><emitter type="area"><rgb name="radiance" value="0.7"/></emitter></shape>
+      <shape type="cube" id="cube"><transform name="to_world"><scale value="0.4"/><rotate y="1" angle="30"/></transform>
+        <bsdf type="diffuse"/></shape>
+      <shape type="rectangle" id="light"><transform name="to_world"><scale value="0.3"/><rotate x="1" angle="90"/>
+        <translate value="1.2,2.2,2.2"/></transform><emitter type="area"><rgb name="radiance" value="60"/></emitter></shape>
+    </scene>)");
+    Parameters params(*scene);
+    params.enable({parse_param_selection("cube.translate=1,0,0")});
+    const PsdrDerivative d = psdr_derivative(*scene, params, batched(*scene, 3, 16, 16, 64, 16));
+    double direct = 0, primary = 0;
+    for (const Color3f& c : d.direct.pixels)
+        direct += std::abs(c.x) + std::abs(c.y) + std::abs(c.z);
+    for (const Color3f& c : d.primary.pixels)
+        primary += std::abs(c.x) + std::abs(c.y) + std::abs(c.z);
+    std::printf("  max_depth 1: |direct| %.3g, |primary| %.3g\n", direct, primary);
+    EXPECT_EQ(direct, 0.0);
+    EXPECT_GT(primary, 0.0);
+}
+

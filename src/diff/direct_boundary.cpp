@@ -114,11 +114,15 @@ namespace {
 
 constexpr uint64_t Salt = 0x94D049BB133111EBULL;
 
+// Direct illumination needs paths of two segments (camera → x_D0 → light): max_depth 1 renders emitters seen
+// directly only, and the term is zero.
+bool direct_paths(const PathSettings& path) { return path.max_depth < 0 || path.max_depth >= 2; }
+
 } // namespace
 
 Image DirectBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
     check_emission_jumps(scene_, params);
-    if (edges_.empty() || scene_.emitters.empty())
+    if (edges_.empty() || scene_.emitters.empty() || !direct_paths(options.path))
         return Image(scene_.sensor->film->width, scene_.sensor->film->height);
     const MaterialForm form(scene_, params, options.first_vertex);
     const SegmentContext context{form, options.volume_endpoints, edges_.media};
@@ -130,7 +134,7 @@ Image DirectBoundary::derivative(const Parameters& params, const BoundaryOptions
 void DirectBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
                               std::vector<double>& gradient) const {
     check_emission_jumps(scene_, params);
-    if (edges_.empty() || scene_.emitters.empty()) return;
+    if (edges_.empty() || scene_.emitters.empty() || !direct_paths(options.path)) return;
     const MaterialForm form(scene_, params, options.first_vertex);
     const SegmentContext context{form, options.volume_endpoints, edges_.media};
     boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
