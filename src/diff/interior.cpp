@@ -181,13 +181,17 @@ DerivativeImage render_derivative(const Scene& scene, const Parameters& params, 
     return result;
 }
 
-Gradient render_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const DiffOptions& options) {
-    check_ready(scene, params);
-    const Film& film = *scene.sensor->film;
+void check_adjoint_size(const Film& film, const Image& adjoint) {
     if (adjoint.width != film.width || adjoint.height != film.height)
         throw Error("gradient: the adjoint image is " + std::to_string(adjoint.width) + "x" +
                     std::to_string(adjoint.height) + ", the film " + std::to_string(film.width) + "x" +
                     std::to_string(film.height));
+}
+
+Gradient render_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const DiffOptions& options) {
+    check_ready(scene, params);
+    const Film& film = *scene.sensor->film;
+    check_adjoint_size(film, adjoint);
     if (options.spp <= 0) throw Error("gradient: spp must be positive");
     const auto start = std::chrono::steady_clock::now();
     const MaterialForm form(scene, params, options.first_vertex);

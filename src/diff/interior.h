@@ -49,6 +49,8 @@ PathSettings path_settings(const Scene& scene);
 // Throws a clear Error for scenes with participating media (for methods that trace surfaces only).
 void require_no_media(const Scene& scene);
 DerivativeImage render_derivative(const Scene& scene, const Parameters& params, const DiffOptions& options);
+// Throws a clear Error unless `adjoint` has the film's size.
+void check_adjoint_size(const Film& film, const Image& adjoint);
 // `adjoint` has the film's size: ∂L/∂I per pixel and channel.
 Gradient render_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const DiffOptions& options);
 

@@ -187,13 +187,7 @@ Color3<Var> warped_path(const WasContext& c, Sampler& sampler, AuxiliaryRng& rng
         prev_bsdf_delta = delta;
         hit = next;
 
-        // Russian roulette (render/path_tracer.h), detached.
-        if (depth + 1 >= unsigned(settings.rr_depth)) {
-            const Color3f t(detach(throughput.x), detach(throughput.y), detach(throughput.z));
-            const float q = std::min(max_component(t) * eta * eta, 0.95f);
-            if (sampler.next_1d() >= q) break;
-            throughput /= Var(q);
-        }
+        if (depth + 1 >= unsigned(settings.rr_depth) && !survives_roulette(throughput, eta, sampler)) break;
     }
     return L;
 }
@@ -488,10 +482,7 @@ Gradient was_gradient(const Scene& scene, const Parameters& params, const Image&
                       const WasOptions& options) {
     require_was_support(scene, params);
     const Film& film = *scene.sensor->film;
-    if (adjoint.width != film.width || adjoint.height != film.height)
-        throw Error("gradient: the adjoint image is " + std::to_string(adjoint.width) + "x" +
-                    std::to_string(adjoint.height) + ", the film " + std::to_string(film.width) + "x" +
-                    std::to_string(film.height));
+    check_adjoint_size(film, adjoint);
     if (options.spp <= 0) throw Error("gradient: spp must be positive");
     const auto start = std::chrono::steady_clock::now();
     const WasContext c(scene, params, options);

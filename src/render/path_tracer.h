@@ -29,6 +29,18 @@ template <typename T> inline T relative_change(const T& v) {
     else return v / T(detach(v));
 }
 
+// Russian roulette, detached (Mitsuba 3: survival probability min(max(throughput / scale)·eta², 0.95)): false
+// when the path ends, else the throughput is divided by the survival probability. `scale` is the estimate's
+// own factor that the rule should not see (volpath_material.h's mean free-flight ratio; 1 otherwise).
+template <typename T>
+bool survives_roulette(Color3<T>& throughput, float eta, Sampler& sampler, float scale = 1.f) {
+    const Color3f t = Color3f(detach(throughput.x), detach(throughput.y), detach(throughput.z)) / scale;
+    const float q = std::min(max_component(t) * eta * eta, 0.95f);
+    if (sampler.next_1d() >= q) return false;
+    throughput /= T(q);
+    return true;
+}
+
 // The reference geometry: vertices are the float hits themselves.
 struct ReferenceGeometry {
     const SurfaceInteraction3f& vertex(const SurfaceInteraction3f& hit) const { return hit; }
@@ -194,13 +206,7 @@ Color3<T> trace_path(const Scene& scene, Sampler& sampler, const Ray& primary, c
         prev_bsdf_delta = delta;
         hit = next;
 
-        // Russian roulette (Mitsuba 3: survival probability min(max(throughput)·eta², 0.95)), detached.
-        if (depth + 1 >= unsigned(settings.rr_depth)) {
-            const Color3f t(detach(throughput.x), detach(throughput.y), detach(throughput.z));
-            const float q = std::min(max_component(t) * eta * eta, 0.95f);
-            if (sampler.next_1d() >= q) break;
-            throughput /= T(q);
-        }
+        if (depth + 1 >= unsigned(settings.rr_depth) && !survives_roulette(throughput, eta, sampler)) break;
     }
     return L;
 }

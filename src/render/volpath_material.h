@@ -304,14 +304,9 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
         next.medium = end.medium;
         v = next;
 
-        // Russian roulette (path_tracer.h's rule on the estimate factor), detached.
-        if (depth + 1 >= unsigned(settings.rr_depth)) {
-            const Color3f t =
-                Color3f(detach(throughput.x), detach(throughput.y), detach(throughput.z)) / mean_ratio;
-            const float q = std::min(max_component(t) * eta * eta, 0.95f);
-            if (sampler.next_1d() >= q) break;
-            throughput /= T(q);
-        }
+        // Russian roulette on the estimate factor (without the free-flight ratio).
+        if (depth + 1 >= unsigned(settings.rr_depth) && !survives_roulette(throughput, eta, sampler, mean_ratio))
+            break;
     }
     return L;
 }
