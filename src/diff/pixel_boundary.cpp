@@ -35,7 +35,7 @@ struct PixelEdges {
 // per row/column and stratum), so that what flows in through one edge and out through the other cancels
 // sample by sample where the image is smooth, instead of only in expectation.
 BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, bool media,
-                                 const PixelEdges& grid, const PathSettings& settings, uint64_t seed, uint64_t i,
+                                 const FilmEdgeVelocity& warp, const PixelEdges& grid, const PathSettings& settings, uint64_t seed, uint64_t i,
                                  Sampler& sampler, RayCounter& rays) {
     BoundarySample out;
     const Sensor& sensor = *scene.sensor;
@@ -48,7 +48,8 @@ BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, b
     const uint64_t per_row = grid.lines(extent), index = is_vertical ? segment : segment - vertical;
     const uint64_t along = index / per_row;
     const int k = grid.line(index % per_row, extent);
-    sampler.start(seed, (is_vertical ? along : uint64_t(H) + along) * uint64_t(grid.strata) + j, 0);
+    const uint64_t stream = (is_vertical ? along : uint64_t(H) + along) * uint64_t(grid.strata) + j;
+    sampler.start(seed, stream, 0);
     const float t = float(along) + (float(j) + sampler.next_1d()) / float(grid.strata);
     const Vec2f s = is_vertical ? Vec2f(float(k), t) : Vec2f(t, float(k));
     const Vec2f across = is_vertical ? Vec2f(1.f, 0.f) : Vec2f(0.f, 1.f);
@@ -72,19 +73,29 @@ BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, b
     } else {
         ++rays.rays;
         const SurfaceInteraction3f hit = scene.intersect(ray);
-        if (!hit.is_valid()) return out; // the environment seen directly does not move with the geometry
-        L = trace_path<float>(scene, sampler, ray, hit, hit, ReferenceGeometry{}, settings, rays) * ray_weight;
-        x = form.vertex(hit).p;
+        if (hit.is_valid()) {
+            L = trace_path<float>(scene, sampler, ray, hit, hit, ReferenceGeometry{}, settings, rays) * ray_weight;
+            x = form.vertex(hit).p;
+        } else if (warp && !settings.hide_emitters) {
+            L = scene.eval_environment(ray.d) * ray_weight; // the warp field moves it (camera rotation)
+        } else {
+            return out; // the environment seen directly does not move with the geometry
+        }
     }
     if (is_black(L)) return out;
 
-    // ṡ · across for the material point seen at s.
-    const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
-    Vec2<Var> s_t;
-    Var jacobian;
-    if (!sensor.film_position(form.to_reference_camera(x, eye), Vec3<Var>(Vec3f(0.f, 0.f, 1.f)), s_t, jacobian))
-        return out;
-    const Var velocity = is_vertical ? s_t.x - Var(s.x) : s_t.y - Var(s.y);
+    // ṡ · across for the material point seen at s, or the warp field's V(s) · across.
+    Var velocity;
+    if (warp) {
+        velocity = warp(s, across, stream, rays);
+    } else {
+        const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
+        Vec2<Var> s_t;
+        Var jacobian;
+        if (!sensor.film_position(form.to_reference_camera(x, eye), Vec3<Var>(Vec3f(0.f, 0.f, 1.f)), s_t, jacobian))
+            return out;
+        velocity = is_vertical ? s_t.x - Var(s.x) : s_t.y - Var(s.y);
+    }
 
     // The pixel before the line (outward normal +across) loses what crosses it, the one after gains it; the
     // splats reach every pixel whose filter jumps there (P_j of Film::filter_weight). Each unit segment is a
@@ -97,8 +108,9 @@ BoundarySample sample_pixel_edge(const Scene& scene, const MaterialForm& form, b
 
 constexpr uint64_t Salt = 0x4CF5AD432745937FULL;
 
-PixelEdges pixel_edges(const Film& film, const BoundaryOptions& options) {
-    PixelEdges grid{film.width, film.height, 1, film.rfilter->plugin != "box"};
+PixelEdges pixel_edges(const Film& film, const BoundaryOptions& options, int strata) {
+    PixelEdges grid{film.width, film.height, strata, film.rfilter->plugin != "box"};
+    if (strata > 0) return grid;
     // The budget per pixel spread evenly over the ~2 edge segments per pixel.
     grid.strata = std::max(1, int(std::lround(double(options.samples_per_pixel) * film.width * film.height / double(grid.segments()))));
     return grid;
@@ -111,9 +123,9 @@ Image PixelBoundary::derivative(const Parameters& params, const BoundaryOptions&
     if (!needs_pixel_boundary(scene_, params, options.first_vertex)) return Image(film.width, film.height);
     const MaterialForm form(scene_, params, options.first_vertex);
     const bool media = scene_has_media(scene_);
-    const PixelEdges grid = pixel_edges(film, options);
+    const PixelEdges grid = pixel_edges(film, options, strata_);
     return boundary_derivative(scene_, params, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
-        return sample_pixel_edge(scene_, form, media, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
+        return sample_pixel_edge(scene_, form, media, velocity_, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
     }, grid.samples());
 }
 
@@ -122,9 +134,9 @@ void PixelBoundary::gradient(const Parameters& params, const Image& adjoint, con
     if (!needs_pixel_boundary(scene_, params, options.first_vertex)) return;
     const MaterialForm form(scene_, params, options.first_vertex);
     const bool media = scene_has_media(scene_);
-    const PixelEdges grid = pixel_edges(*scene_.sensor->film, options);
+    const PixelEdges grid = pixel_edges(*scene_.sensor->film, options, strata_);
     boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
-        return sample_pixel_edge(scene_, form, media, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
+        return sample_pixel_edge(scene_, form, media, velocity_, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
     }, gradient, grid.samples());
 }
 

@@ -10,9 +10,13 @@
 // the same offsets and random numbers on a pixel's opposite edges; each interior edge point contributes to
 // the two pixels it separates. In participating media the material point seen at s is where a free flight along
 // the camera ray ends (diff/media_radiance.h): a medium vertex, moving by the volume motion, or a surface.
+// Warped-area sampling (diff/warped_area.h) takes the same term with the warp field V(s) in place of ṡ: the
+// divergence theorem on the film leaves −∮ L (V · n_out) over the edges where the filter (or the film) ends.
 #pragma once
 #include "core/image.h"
 #include "diff/boundary_driver.h"
+
+#include <functional>
 
 namespace penumbra {
 
@@ -20,9 +24,16 @@ namespace penumbra {
 // material-form first vertex.
 bool needs_pixel_boundary(const Scene& scene, const Parameters& params, FirstVertex first_vertex);
 
+// The film-space velocity across the edge at s (`across`: the edge's unit normal, +x or +y) for edge sample
+// `sample`, as a tape value (value ~0): what replaces the material point's ṡ · across.
+using FilmEdgeVelocity =
+    std::function<Var(const Vec2f& s, const Vec2f& across, uint64_t sample, RayCounter& rays)>;
+
 class PixelBoundary final : public BoundaryTerm {
 public:
-    explicit PixelBoundary(const Scene& scene) : scene_(scene) {}
+    // `strata`: samples per unit edge segment (0: from the options' samples_per_pixel).
+    explicit PixelBoundary(const Scene& scene, FilmEdgeVelocity velocity = {}, int strata = 0)
+        : scene_(scene), velocity_(std::move(velocity)), strata_(strata) {}
     // Both are zero (and cost nothing) unless needs_pixel_boundary().
     Image derivative(const Parameters& params, const BoundaryOptions& options) const override;
     void gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
@@ -30,6 +41,8 @@ public:
 
 private:
     const Scene& scene_;
+    FilmEdgeVelocity velocity_;
+    int strata_;
 };
 
 } // namespace penumbra

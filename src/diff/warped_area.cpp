@@ -7,6 +7,7 @@
 #include "diff/control_variate.h"
 #include "diff/film_sample.h"
 #include "diff/material_form.h"
+#include "diff/pixel_boundary.h"
 #include "render/emitter_hit.h"
 #include "render/light_medium.h"
 #include "render/mis.h"
@@ -47,13 +48,14 @@ struct WasContext {
     PathSettings settings;
     float sigma;      // the film auxiliary distribution's standard deviation (pixels): the filter's
     Vec3f camera;     // the center of projection
-    bool film_edge;   // the film's edge cuts the filters (no sample_border): a static discontinuity
-    float film_scale; // the boundary test's distance scale on the film: (pixels per radian)² / σ²
+    bool film_edge;    // the film's edge cuts the filters (no sample_border): a static discontinuity
+    bool filter_jumps; // the filter jumps at its support's edge (box): a static discontinuity per pixel
+    float film_scale;  // the boundary test's distance scale on the film: (pixels per radian)² / σ²
 
     WasContext(const Scene& s, const Parameters& p, const WasOptions& o)
         : scene(s), params(p), form(s, p, FirstVertex::Material), boundary(s), warp(o.warp), settings(o.path),
           sigma(filter_sigma(*s.sensor->film->rfilter)), camera(s.sensor->to_world.apply_point(Vec3f(0.f))),
-          film_edge(!s.sensor->film->sample_border) {
+          film_edge(!s.sensor->film->sample_border), filter_jumps(jumps(*s.sensor->film->rfilter)) {
         // Pixels per radian at the film's center.
         const Film& film = *s.sensor->film;
         const Vec2f center(0.5f * float(film.width), 0.5f * float(film.height));
@@ -62,6 +64,9 @@ struct WasContext {
         const float radians = 2.f * std::asin(std::min(1.f, 0.5f * norm(d1 - d0)));
         film_scale = 1.f / (radians * radians * sigma * sigma);
     }
+
+    // Whether the filter is cut at its radius (a box) rather than falling continuously to zero.
+    static bool jumps(const ReconstructionFilter& f) { return f.eval(0.999f * f.radius()) > 0.05f * f.eval(0.f); }
 
     // The standard deviation of the normalized 1D filter profile (its second moment, by quadrature).
     static float filter_sigma(const ReconstructionFilter& f) {
@@ -193,21 +198,13 @@ Color3<Var> warped_path(const WasContext& c, Sampler& sampler, AuxiliaryRng& rng
 }
 
 // The film auxiliary sample at position `x` (Algorithm 2 on the film, §3.3): the boundary test of the point
-// seen through x and its film motion ∂θ s(y(θ)) (the direct warp). Beyond a cutting film edge the filters
-// end: a static discontinuity, no motion there and B the distance to the edge.
+// seen through x and its film motion ∂θ s(y(θ)) (the direct warp). Positions beyond the film's edge see the
+// scene as well: the edge is not a boundary of the field (where the filters end, the film-edge term takes the
+// flux across it: pixel_edge_velocity below).
 void film_auxiliary(const WasContext& c, const Vec2f& x, const Vec2f& aperture, PixelAuxiliarySample& a,
                     RayCounter& rays) {
     const Sensor& sensor = *c.scene.sensor;
-    const Film& film = *sensor.film;
     a.warp = Vec2<Var>(x);
-    if (c.film_edge && (x.x < 0.f || x.y < 0.f || x.x > float(film.width) || x.y > float(film.height))) {
-        // B = D(x', the film's edge) (diff/boundary_test.h's distance term, in the film's metric).
-        const float dx = std::max({-x.x, x.x - float(film.width), 0.f});
-        const float dy = std::max({-x.y, x.y - float(film.height), 0.f});
-        a.boundary =
-            float(std::expm1(std::min(0.5 * double(dx * dx + dy * dy) / double(c.sigma * c.sigma), 80.0)));
-        return;
-    }
     const Ray ray = sensor.sample_ray(x, aperture).first;
     ++rays.rays;
     const SurfaceInteraction3f hit = c.scene.intersect(ray);
@@ -230,6 +227,41 @@ std::pair<Vec3f, Vec3f> direction_gradient(const Sensor& sensor, const Vec2f& x,
         return sensor.sample_ray(Vec2f(x.x + dx, x.y + dy), aperture).first.d;
     };
     return {(d(h, 0.f) - d(-h, 0.f)) * (0.5f / h), (d(0.f, h) - d(0.f, -h)) * (0.5f / h)};
+}
+
+// V(s) · across at a point s of a pixel edge or of the film's edge (the warp field of the film estimated there
+// as at a camera sample), for the term −∮ P_j L (V · n_out) over the edges where the filters jump (the
+// divergence theorem on the film with a field that does not vanish there; diff/pixel_boundary.h). The
+// auxiliary stream is the edge sample's own, shared along a row or column like its path's.
+Var pixel_edge_velocity(const WasContext& c, uint64_t seed, const Vec2f& s, const Vec2f& across, uint64_t stream,
+                        RayCounter& rays) {
+    AuxiliaryRng rng(seed ^ 0x5851F42D4C957F2DULL, stream, 0);
+    const Vec2f aperture(0.5f);
+    std::vector<PixelAuxiliarySample> aux = sample_pixel_auxiliary(c.sigma, c.warp, rng);
+    for (PixelAuxiliarySample& a : aux)
+        film_auxiliary(c, s + a.offset, aperture, a, rays);
+    const PixelWarpEstimate e = estimate_pixel_warp(s, aux, c.sigma, c.warp);
+    return (e.position.x - Var(s.x)) * Var(across.x) + (e.position.y - Var(s.y)) * Var(across.y);
+}
+
+// The edge term's samples per unit edge segment: about `spp` per pixel whose filter jumps at its own edges
+// (~2 unit segments per pixel), `spp` per unit of the film's edge otherwise.
+PixelBoundary pixel_edge_term(const WasContext& c, uint64_t seed, int spp) {
+    return PixelBoundary(
+        c.scene,
+        [&c, seed](const Vec2f& s, const Vec2f& across, uint64_t stream, RayCounter& rays) {
+            return pixel_edge_velocity(c, seed, s, across, stream, rays);
+        },
+        c.filter_jumps ? std::max(1, spp / 2) : spp);
+}
+
+BoundaryOptions pixel_edge_options(const WasContext& c, const WasOptions& options, uint64_t seed) {
+    BoundaryOptions bo;
+    bo.seed = seed;
+    bo.threads = options.threads;
+    bo.path = c.settings;
+    bo.first_vertex = FirstVertex::Material;
+    return bo;
 }
 
 // One camera sample of pixel (px, py): the film position x (diff/film_sample.h), warped on the film (value x,
@@ -394,7 +426,7 @@ PixelSums forward_batch(const WasContext& c, const WasOptions& options, uint64_t
                     // The control variate needs the sampling density's score to integrate to zero: pixels
                     // whose filter the film's edge cuts are left without it.
                     const bool control =
-                        options.control_variate &&
+                        options.control_variate && !c.filter_jumps &&
                         (!c.film_edge || (x + 0.5f >= r && y + 0.5f >= r && film.width - x - 0.5f >= r &&
                                           film.height - y - 0.5f >= r));
                     PixelLinearModel model;
@@ -447,13 +479,6 @@ void require_was_support(const Scene& scene, const Parameters& params) {
         throw Error(
             "method was warps the film: it needs a sensor with one center of projection (perspective, "
             "orthographic, thinlens with aperture 0)");
-    const ReconstructionFilter& f = *scene.sensor->film->rfilter;
-    if (f.eval(0.999f * f.radius()) > 0.05f * f.eval(0.f))
-        throw Error("method was needs a reconstruction filter that falls continuously to zero (its film warp "
-                    "would move the jumps of '" +
-                    f.to_string() +
-                    "' at pixel edges): use <rfilter type=\"gaussian\"/> "
-                    "(Mitsuba's default) or tent, or the psdr method");
 }
 
 DerivativeImage was_derivative(const Scene& scene, const Parameters& params, const WasOptions& options) {
@@ -468,8 +493,15 @@ DerivativeImage was_derivative(const Scene& scene, const Parameters& params, con
         auto progress = options.progress
                             ? std::function<void(float)>([&, b](float f) { options.progress((b + f) / B); })
                             : std::function<void(float)>();
-        const PixelSums s =
-            forward_batch(c, options, options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b), progress, cost);
+        const uint64_t seed = options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b);
+        PixelSums s = forward_batch(c, options, seed, progress, cost);
+        BoundaryOptions bo = pixel_edge_options(c, options, seed);
+        SampleCost edge_cost;
+        bo.cost = &edge_cost;
+        const Image edges = pixel_edge_term(c, seed, options.spp).derivative(params, bo);
+        cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
+        for (size_t i = 0; i < edges.pixels.size(); ++i)
+            s.derivative.pixels[i] += edges.pixels[i];
         primal.add(s.primal);
         derivative.add(s.derivative);
     }
@@ -533,6 +565,14 @@ Gradient was_gradient(const Scene& scene, const Parameters& params, const Image&
             cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays.rays, tape_nodes});
         },
         options.progress);
+    std::vector<double> edges(dim, 0.0);
+    BoundaryOptions bo = pixel_edge_options(c, options, options.seed);
+    SampleCost edge_cost;
+    bo.cost = &edge_cost;
+    pixel_edge_term(c, options.seed, options.spp).gradient(params, adjoint, bo, edges);
+    cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
+    for (size_t k = 0; k < dim; ++k)
+        result.values[k] += edges[k];
     result.cost = cost.get();
     for (const std::vector<double>& g : gradients)
         for (size_t k = 0; k < dim; ++k)

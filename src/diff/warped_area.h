@@ -10,14 +10,16 @@
 //             uniform density on its support (diff/film_sample.h: the filter's score ∂x k / k is unbounded
 //             where a truncated filter falls to zero, the mixture's ∂x k / p is not); the auxiliary positions
 //             are N(x, σ² I) on the film with σ the filter's standard deviation (§3.3); the filter's gradient
-//             term is controlled by the linear control variate of Appendix D (forward mode);
+//             term is controlled by the linear control variate of Appendix D (forward mode); where the
+//             filters jump (a box filter's pixel edges; the film's edge without sample_border) the field does
+//             not vanish, and the divergence theorem on the film leaves −∮ P_j L (V · n_out) over those
+//             edges: the pixel-edge term (diff/pixel_boundary.h with V in place of the material velocity);
 //   surfaces  the BSDF-sampled direction and the emitter-sampled direction (NEE) are warped with vMF
 //             auxiliary rays (κ, N'); the next vertex is where the warped ray meets the moving triangle;
 //   delta     specular vertices and delta lights are not warped (no integral to warp): shadows of point,
 //             spot and directional lights are discontinuities that no boundary test at the previous vertex
 //             sees, and their motion is missed (paper 004 uses area and vMF lights).
-// Surfaces only (no participating media); a continuous reconstruction filter is required (the box filter's
-// jumps at pixel edges are static discontinuities the film warp would move).
+// Surfaces only (no participating media).
 #pragma once
 #include "diff/interior.h"
 #include "diff/warp_field.h"
@@ -42,8 +44,8 @@ struct WasOptions {
     std::function<void(float)> progress;
 };
 
-// Throws a clear Error for what the method cannot differentiate (media, a box filter, no geometry moving and
-// nothing else to do is fine).
+// Throws a clear Error for what the method cannot differentiate (media, sensors without one center of
+// projection).
 void require_was_support(const Scene& scene, const Parameters& params);
 
 // Forward mode: dI/dθ along params.direction() (with per-pixel standard errors over the batches).

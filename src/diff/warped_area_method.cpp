@@ -72,7 +72,7 @@ MethodInfo was_method_info() {
     return {
         "was",
         "warped-area sampling of paper 004: boundary derivatives from auxiliary rays at every path vertex, "
-        "no edge sampling (surfaces, continuous pixel filters)",
+        "no edge sampling (surfaces)",
         {{"was-unbiased",
           Type::Bool,
           "Russian-roulette debiasing of the warp's normalization (Algorithm 3) instead of a fixed N'",
