@@ -272,6 +272,7 @@ struct CameraSample {
     Vec2f offset;       // x − the pixel center
     float pdf = 0.f;    // p(x)
     Vec2<Var> position; // x(θ)
+    bool on_film = false; // P_j(x) > 0
 };
 
 CameraSample camera_sample(const WasContext& c, Sampler& sampler, AuxiliaryRng& rng, int px, int py,
@@ -283,6 +284,7 @@ CameraSample camera_sample(const WasContext& c, Sampler& sampler, AuxiliaryRng& 
     CameraSample out{Color3<Var>(Var(0.f)), Color3f(0.f), fs.offset, fs.pdf, Vec2<Var>(x)};
     const float P0 = film.filter_weight(px, py, x);
     if (!(P0 > 0.f)) return out;
+    out.on_film = true;
     const Vec2f aperture = sampler.next_2d();
     const auto [ray, ray_weight] = sensor.sample_ray(x, aperture);
     ++rays.rays;
@@ -378,23 +380,68 @@ class PixelLinearModel {
     int n_ = 0;
 };
 
-// ∇P_j(x) / p(x) at the film sample (central differences of the filter): the factor of the filter's gradient
-// term M = g ⟨∇P_j / p, V⟩ (Appendix D), whose mean over p is zero and E[x (∇P_j / p)ᵀ] = −I for a continuous
-// filter that vanishes at its support's edge (integration by parts).
+// ∇P_j(x) / p(x) at the film sample (central differences of the filter, uncut: inside the film P_j is the
+// filter over its film mass; outside it is 0): the factor of the filter's gradient term M = g ⟨∇P_j / p, V⟩
+// (Appendix D).
 Vec2f filter_gradient_ratio(const Film& film, int px, int py, const Vec2f& offset, float pdf) {
-    constexpr float h = 1e-3f;
     const Vec2f x(px + 0.5f + offset.x, py + 0.5f + offset.y);
-    const auto P = [&](float dx, float dy) { return film.filter_weight(px, py, Vec2f(x.x + dx, x.y + dy)); };
-    return Vec2f(P(h, 0.f) - P(-h, 0.f), P(0.f, h) - P(0.f, -h)) * (0.5f / (h * pdf));
+    if (!film.sample_border && (x.x < 0.f || x.y < 0.f || x.x > float(film.width) || x.y > float(film.height)))
+        return Vec2f(0.f);
+    constexpr float h = 1e-3f;
+    const float mass = film.sample_border ? 1.f : film.film_mass(px, py);
+    const auto P = [&](float dx, float dy) { return film.rfilter->eval_normalized(Vec2f(offset.x + dx, offset.y + dy)); };
+    return Vec2f(P(h, 0.f) - P(-h, 0.f), P(0.f, h) - P(0.f, -h)) * (0.5f / (h * pdf * mass));
+}
+
+// Where the film's edge cuts pixel j's filter, E[C] gains the flux of P_j (b + A x) across the cut
+// (integration by parts over the support ∩ the film; P_j vanishes on the rest of the support's edge and
+// integrates to 1 over the film): Σ_cuts n·b ∫ P_j dℓ + n·A ∫ P_j x dℓ. The moments per cut, by the midpoint
+// rule along it.
+struct FilmCut {
+    Vec2f normal; // outward
+    float m0 = 0.f;
+    Vec2f m1; // ∫ P_j dℓ, ∫ P_j x dℓ (x the offset from the pixel center)
+};
+std::vector<FilmCut> film_cuts(const Film& film, int px, int py) {
+    std::vector<FilmCut> cuts;
+    if (film.sample_border) return cuts;
+    const float r = film.rfilter->radius(), mass = film.film_mass(px, py);
+    const Vec2f c(px + 0.5f, py + 0.5f), size(float(film.width), float(film.height));
+    for (int axis = 0; axis < 2; ++axis)
+        for (int side = 0; side < 2; ++side) {
+            const float center = axis == 0 ? c.x : c.y, line = side == 0 ? 0.f : (axis == 0 ? size.x : size.y);
+            if (std::abs(line - center) >= r) continue;
+            const float other = axis == 0 ? c.y : c.x, extent = axis == 0 ? size.y : size.x;
+            const float lo = std::max(other - r, 0.f), hi = std::min(other + r, extent);
+            FilmCut cut;
+            cut.normal = axis == 0 ? Vec2f(side == 0 ? -1.f : 1.f, 0.f) : Vec2f(0.f, side == 0 ? -1.f : 1.f);
+            constexpr int N = 64;
+            const float step = (hi - lo) / N;
+            for (int i = 0; i < N; ++i) {
+                const float t = lo + (i + 0.5f) * step - other;
+                const Vec2f x = axis == 0 ? Vec2f(line - center, t) : Vec2f(t, line - center);
+                const float P = film.rfilter->eval_normalized(x) / mass * step;
+                cut.m0 += P;
+                cut.m1 = cut.m1 + x * P;
+            }
+            cuts.push_back(cut);
+        }
+    return cuts;
 }
 
 // Q − M = −(C(x) − E[C]) (Appendix D) for one channel, with the sample's own ∇P_j / p in place of the paper's
-// Gaussian score: C = ⟨∇P_j / p, μ_g μ_V + A x⟩, E[C] = −tr(A).
-float control_correction(const LinearControlVariate& cv, const Vec2f& x, const Vec2f& score) {
+// Gaussian score: C = ⟨∇P_j / p, μ_g μ_V + A x⟩, E[C] = −tr(A) + the cuts' flux.
+float control_correction(const LinearControlVariate& cv, const std::vector<FilmCut>& cuts, const Vec2f& x,
+                         const Vec2f& score) {
     const Vec2f b = cv.mu_v * cv.mu_g;
     const Vec2f ax(LinearControlVariate::dot2(cv.row(0), x), LinearControlVariate::dot2(cv.row(1), x));
     const float C = LinearControlVariate::dot2(score, b + ax);
-    return -(C - cv.mean());
+    float mean = cv.mean();
+    for (const FilmCut& cut : cuts) {
+        const Vec2f a1(LinearControlVariate::dot2(cv.row(0), cut.m1), LinearControlVariate::dot2(cv.row(1), cut.m1));
+        mean += LinearControlVariate::dot2(cut.normal, b) * cut.m0 + LinearControlVariate::dot2(cut.normal, a1);
+    }
+    return -(C - mean);
 }
 
 struct PixelSums {
@@ -409,7 +456,6 @@ PixelSums forward_batch(const WasContext& c, const WasOptions& options, uint64_t
                         const std::function<void(float)>& progress, SharedSampleCost& cost) {
     const Film& film = *c.scene.sensor->film;
     PixelSums out{Image(film.width, film.height), Image(film.width, film.height)};
-    const float r = film.rfilter->radius();
     for_each_tile(
         film.width, film.height, options.threads,
         [&](int x0, int y0, int x1, int y1) {
@@ -423,12 +469,9 @@ PixelSums forward_batch(const WasContext& c, const WasOptions& options, uint64_t
                 for (int x = x0; x < x1; ++x) {
                     check_interrupt();
                     const uint64_t pixel = uint64_t(y) * film.width + x;
-                    // The control variate needs the sampling density's score to integrate to zero: pixels
-                    // whose filter the film's edge cuts are left without it.
-                    const bool control =
-                        options.control_variate && !c.filter_jumps &&
-                        (!c.film_edge || (x + 0.5f >= r && y + 0.5f >= r && film.width - x - 0.5f >= r &&
-                                          film.height - y - 0.5f >= r));
+                    // A box filter's gradient term is all at its edges (the pixel-edge term): no control.
+                    const bool control = options.control_variate && !c.filter_jumps;
+                    const std::vector<FilmCut> cuts = control ? film_cuts(film, x, y) : std::vector<FilmCut>();
                     PixelLinearModel model;
                     Vec3d primal(0.0), derivative(0.0);
                     for (int m = 0; m < options.spp; ++m) {
@@ -449,8 +492,8 @@ PixelSums forward_batch(const WasContext& c, const WasOptions& options, uint64_t
                             LinearControlVariate cv;
                             const PixelLinearModel& fitted = model.ready() ? model : previous;
                             for (int ch = 0; ch < 3; ++ch)
-                                if (fitted.fit(ch, cv)) d[ch] += control_correction(cv, s.offset, ratio);
-                            if (std::isfinite(v.x) && std::isfinite(v.y)) model.add(s.offset, s.radiance, v);
+                                if (fitted.fit(ch, cv)) d[ch] += control_correction(cv, cuts, s.offset, ratio);
+                            if (s.on_film && std::isfinite(v.x) && std::isfinite(v.y)) model.add(s.offset, s.radiance, v);
                         }
                         primal += Vec3d(value.x, value.y, value.z);
                         if (is_finite(Vec3f(d))) derivative += d;
