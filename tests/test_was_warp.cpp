@@ -7,6 +7,8 @@
 #include "core/rng.h"
 #include "diff/auxiliary_rays.h"
 #include "diff/control_variate.h"
+#include "diff/film_sample.h"
+#include "scene/scene.h"
 #include "mesh_test_util.h"
 
 #include <gtest/gtest.h>
@@ -514,6 +516,52 @@ TEST(WasControlVariate, TiltedFlatEmitterInPixel) {
                 q.se, exact, z, controlled.variance() / plain.variance());
     EXPECT_LT(std::abs(z), 4.0);
     EXPECT_LT(controlled.variance(), 0.1 * plain.variance());
+}
+
+// The control variate's known mean where the film's edge cuts the filter (hdrfilm without sample_border):
+// E[C] = −tr(A) + the cut's flux, checked against the mean of C over the film sampler's own draws at a corner
+// pixel, an edge pixel and an interior one (no cut), for a linear model with every term nonzero.
+TEST(WasControlVariate, KnownMeanWhereTheFilmCutsTheFilter) {
+    const auto scene = load_scene_string(R"(<scene version="3.0.0">
+      <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="6"/>
+        <integer name="height" value="5"/><boolean name="sample_border" value="false"/>
+        <rfilter type="gaussian"/></film></sensor>
+    </scene>)");
+    const Film& film = *scene->sensor->film;
+    LinearControlVariate cv;
+    cv.mu_g = 0.8f;
+    cv.grad_g = Vec2f(0.3f, -0.5f);
+    cv.mu_v = Vec2f(1.5f, -0.7f);
+    cv.jac_v[0] = Vec2f(0.4f, 0.9f);
+    cv.jac_v[1] = Vec2f(-0.6f, 0.2f);
+    const int pixels[3][2] = {{0, 0}, {2, 4}, {3, 2}};
+    for (const auto& px : pixels) {
+        const std::vector<FilmCut> cuts = film_cuts(film, px[0], px[1]);
+        EXPECT_EQ(cuts.size(), size_t(px[0] == 0 ? 2 : px[1] == 4 ? 1 : 0));
+        Sampler sampler;
+        std::vector<double> means;
+        for (int b = 0; b < 16; ++b) {
+            double sum = 0.0;
+            const int n = 400000;
+            for (int i = 0; i < n; ++i) {
+                sampler.start(7, uint64_t(b), uint64_t(i));
+                const FilmSample fs = sample_film(*film.rfilter, sampler, false);
+                const Vec2f score = filter_gradient_ratio(film, px[0], px[1], fs.offset, fs.pdf);
+                // −correction = C − E[C]: zero mean if E[C] is right.
+                sum -= control_correction(cv, cuts, fs.offset, score);
+            }
+            means.push_back(sum / n);
+        }
+        const BatchMean m = batch_mean(means);
+        std::printf("pixel (%d, %d), %zu cuts: E[C − E[C]] = %.5f ± %.5f\n", px[0], px[1], cuts.size(), m.mean,
+                    m.se);
+        EXPECT_LT(std::abs(m.mean), 4.0 * m.se + 1e-4);
+    }
+    // Without the cut's flux the mean is off at the corner pixel (the check can fail).
+    const std::vector<FilmCut> corner = film_cuts(film, 0, 0);
+    const float flux =
+        control_correction(cv, corner, Vec2f(0.f), Vec2f(0.f)) - control_correction(cv, {}, Vec2f(0.f), Vec2f(0.f));
+    EXPECT_GT(std::abs(flux), 0.05f);
 }
 
 TEST(WasWarpedVertex, FollowsMovingPlaneAndWarpedDirection) {

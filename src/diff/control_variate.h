@@ -8,8 +8,16 @@
 // has the known mean E[C] = −tr(A) (E[x xᵀ] = σ² I; the paper's σ² tr(A) is the same with ∂x k unnormalized),
 // so Q = M − C + E[C] is unbiased whatever A is, as long as A does not depend on x (estimate μ_g, ∇g, μ_V, ∇V
 // from other samples, e.g. the previous pass or pixel).
+//
+// penumbra samples film positions from a defensive mixture p (diff/film_sample.h) and uses the sample's own
+// ∇P_j / p in place of the Gaussian score: C = ⟨∇P_j / p, μ_g μ_V + A x⟩ with E[C] = −tr(A) for any filter
+// that falls continuously to zero at its support's edge (integration by parts). Where the film's edge cuts the
+// support (hdrfilm without sample_border: P_j ends there), E[C] gains the flux Σ_cuts ∮ P_j (μ_g μ_V + A x)·n.
 #pragma once
 #include "core/vector.h"
+#include "scene/film.h"
+
+#include <vector>
 
 namespace penumbra {
 
@@ -34,5 +42,23 @@ struct LinearControlVariate {
     // Q = M − C(x) + E[C].
     float controlled(float m, const Vec2f& x) const { return m - control(x) + mean(); }
 };
+
+// ∇P_j(x) / p(x) at the film offset x from pixel (px, py)'s center (central differences of the uncut filter,
+// 0 off the film).
+Vec2f filter_gradient_ratio(const Film& film, int px, int py, const Vec2f& offset, float pdf);
+
+// Where the film's edge cuts pixel j's filter support: the outward normal of the cut and the moments
+// ∫ P_j dℓ and ∫ P_j x dℓ along it (x the offset from the pixel center; midpoint rule).
+struct FilmCut {
+    Vec2f normal;
+    float m0 = 0.f;
+    Vec2f m1;
+};
+std::vector<FilmCut> film_cuts(const Film& film, int px, int py);
+
+// Q − M = −(C(x) − E[C]) for the control variate `cv` at film offset x with score ∇P_j / p, E[C] = −tr(A) +
+// the cuts' flux.
+float control_correction(const LinearControlVariate& cv, const std::vector<FilmCut>& cuts, const Vec2f& x,
+                         const Vec2f& score);
 
 } // namespace penumbra
