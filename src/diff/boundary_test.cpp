@@ -27,6 +27,24 @@ std::vector<uint32_t> canonical_ids(const TriangleMesh& mesh) {
     return id;
 }
 
+// Whether the shading normal jumps across edge e: a flat-shaded shape (face normals, which differ across a
+// discontinuity edge between faces) or split vertex normals (a hard edge of a smooth-shaded mesh).
+bool is_crease(const Shape& shape, const std::vector<uint32_t>& canonical, const Edge& e) {
+    const TriangleMesh& mesh = shape.mesh;
+    if (e.f1 < 0) return false;
+    if (mesh.normals.empty() || shape.face_normals) return true;
+    const auto corner = [&](int32_t f, uint32_t v) {
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t u = mesh.indices[3 * size_t(f) + size_t(k)];
+            if (canonical[u] == canonical[v]) return u;
+        }
+        return v;
+    };
+    for (const uint32_t v : {e.v0, e.v1})
+        if (dot(mesh.normals[corner(e.f0, v)], mesh.normals[corner(e.f1, v)]) < 0.9999f) return true;
+    return false;
+}
+
 } // namespace
 
 BoundaryTest::BoundaryTest(const Scene& scene, float spread, bool implicit_edges) : spread_(spread) {
@@ -36,6 +54,9 @@ BoundaryTest::BoundaryTest(const Scene& scene, float spread, bool implicit_edges
         MeshEdges m;
         m.canonical = canonical_ids(mesh);
         m.edges = discontinuity_edges(mesh);
+        m.crease.resize(m.edges.size());
+        for (size_t k = 0; k < m.edges.size(); ++k)
+            m.crease[k] = is_crease(*shape, m.canonical, m.edges[k]);
         const size_t n = mesh.vertex_count();
         m.offsets.assign(n + 1, 0);
         for (const Edge& e : m.edges) {
@@ -78,12 +99,12 @@ float BoundaryTest::normal_value(const MeshEdges& m, uint32_t v, const Vec3f& di
 }
 
 bool BoundaryTest::on_boundary(const Shape& shape, const MeshEdges& m, uint32_t v, uint32_t w,
-                               const Vec3f& origin, bool& to_w) const {
+                               const Vec3f& origin, bool creases, bool& to_w) const {
     const uint32_t c = m.canonical[v], cw = m.canonical[w];
     bool any = false;
     for (uint32_t k = m.offsets[c]; k < m.offsets[c + 1]; ++k) {
         const Edge& e = m.edges[m.ids[k]];
-        if (!is_silhouette(shape.mesh, e, origin)) continue;
+        if (!(creases && m.crease[m.ids[k]]) && !is_silhouette(shape.mesh, e, origin)) continue;
         any = true;
         if (m.canonical[e.v0] == cw || m.canonical[e.v1] == cw) to_w = true;
     }
@@ -94,7 +115,7 @@ float BoundaryTest::vertex_value(const Shape& shape, uint32_t v, const Vec3f& or
                                  const Vec3f& direction) const {
     const MeshEdges& m = edges_of(shape);
     bool unused = false;
-    return on_boundary(shape, m, v, v, origin, unused) ? 0.f : normal_value(m, v, direction);
+    return on_boundary(shape, m, v, v, origin, false, unused) ? 0.f : normal_value(m, v, direction);
 }
 
 namespace {
@@ -138,7 +159,7 @@ float BoundaryTest::operator()(const SurfaceInteraction3f& hit, const Vec3f& ori
     for (int k = 0; k < 3; ++k) {
         const uint32_t v = i[k], w = i[(k + 1) % 3];
         bool edge = false;
-        if (!on_boundary(shape, m, v, w, origin, edge)) continue;
+        if (!on_boundary(shape, m, v, w, origin, true, edge)) continue;
         r = std::min(r, edge ? angle_to_segment(origin, hit.p, p[v], p[w]) : angle_to_segment(origin, hit.p, p[v], p[v]));
     }
     // An implicit edge inside the triangle (u: the sine of the angle to it).

@@ -18,7 +18,10 @@
 // singular on both sides of a silhouette and the field takes the occluded side's warp at the boundary, which
 // biases the estimate (Appendix A's remark on sparse boundary functions). D_e vanishes only at the boundary
 // and like the squared distance there, so the weights' integral still diverges at boundary points for γ ≥ 1
-// (Eq. 8's limit).
+// (Eq. 8's limit). The distance term also takes creases, edges across which the shading normal jumps (flat-shaded
+// shapes, split vertex normals): the radiance jumps there and the jump moves with the shape, which the field
+// follows only approximately unless B vanishes (a rotating flat-shaded cube: z +5.5 → +1.9 on the film,
+// with the film jackknife; the paper's meshes are smooth-shaded). The paper's mode (scale 0) keeps Appendix A.
 //
 // Implicit edges (paper §5.5's limitation, lifted here): where two triangles cross (ImplicitEdges), the
 // surface seen changes along the crossing segment, inside both triangles. A hit on a triangle with segments
@@ -70,14 +73,15 @@ class BoundaryTest {
         std::vector<Edge> edges;            // discontinuity edges: open, or between non-coplanar faces
         std::vector<uint32_t> offsets, ids; // edges at each canonical vertex: ids[offsets[c] .. offsets[c+1])
         std::vector<Vec3f> normals;         // average face normal at each canonical vertex
+        std::vector<uint8_t> crease;        // per edge: the shading normal jumps across it
     };
     const MeshEdges& edges_of(const Shape& shape) const;
     // The normal term of vertex v (step 2 without the zeroing).
     float normal_value(const MeshEdges& m, uint32_t v, const Vec3f& direction) const;
-    // Whether a silhouette or open edge (seen from `origin`) ends at vertex v; the edge to vertex `w`, if
-    // there is one, is reported in `to_w`.
+    // Whether a silhouette or open edge (seen from `origin`), or with `creases` a crease edge, ends at vertex
+    // v; the edge to vertex `w`, if there is one, is reported in `to_w`.
     bool on_boundary(const Shape& shape, const MeshEdges& m, uint32_t v, uint32_t w, const Vec3f& origin,
-                     bool& to_w) const;
+                     bool creases, bool& to_w) const;
     // The spread map u / (1 − (1 − β)(1 − u)) of Appendix A step 2 (there u = c²), for the implicit edges.
     float spread_map(float u) const { return u / (1.f - (1.f - spread_) * (1.f - u)); }
 

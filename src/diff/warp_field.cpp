@@ -58,6 +58,50 @@ WarpCoefficients warp_coefficients(std::span<const double> w, std::span<const Ve
     return out;
 }
 
+WarpCoefficients jackknife_coefficients(std::span<const double> w, std::span<const Vec3f> g, size_t group) {
+    const size_t n = w.size(), groups = n / std::max<size_t>(1, group);
+    WarpCoefficients out{std::vector<double>(n, 0.0), std::vector<Vec3f>(n, Vec3f(0.f))};
+    if (groups < 2 || groups * group != n) return out;
+    double z = 0.0;
+    Vec3f gz(0.f);
+    for (size_t i = 0; i < n; ++i) {
+        z += w[i];
+        gz += g[i];
+    }
+    if (!(z > 0.0)) return out;
+    // Per group k: Z_(−k), G_(−k); S = Σ_k 1/Z_(−k), T = Σ_k G_(−k)/Z_(−k)².
+    std::vector<double> zk(groups);
+    std::vector<Vec3f> gk(groups);
+    double S = 0.0;
+    Vec3f T(0.f);
+    for (size_t k = 0; k < groups; ++k) {
+        double wk = 0.0;
+        Vec3f g_k(0.f);
+        for (size_t i = k * group; i < (k + 1) * group; ++i) {
+            wk += w[i];
+            g_k += g[i];
+        }
+        zk[k] = z - wk;
+        gk[k] = gz - g_k;
+        if (zk[k] > 0.0) {
+            S += 1.0 / zk[k];
+            T += gk[k] * float(1.0 / (zk[k] * zk[k]));
+        }
+    }
+    // Σ over the leave-one-out estimates that contain sample i (all but its own group's), then
+    // J = G F_N − (G − 1)/G Σ_k F_(−k) per coefficient.
+    const double G = double(groups), shrink = (G - 1.0) / G;
+    for (size_t i = 0; i < n; ++i) {
+        const size_t k = i / group;
+        const double s_i = S - (zk[k] > 0.0 ? 1.0 / zk[k] : 0.0);
+        const Vec3f t_i = T - (zk[k] > 0.0 ? gk[k] * float(1.0 / (zk[k] * zk[k])) : Vec3f(0.f));
+        out.field[i] = G * w[i] / z - shrink * w[i] * s_i;
+        out.divergence[i] = (g[i] * float(1.0 / z) - gz * float(w[i] / (z * z))) * float(G) -
+                            (g[i] * float(s_i) - t_i * float(w[i])) * float(shrink);
+    }
+    return out;
+}
+
 WarpEstimate estimate_warp(const Vec3f& omega, std::span<const AuxiliarySample> aux, const WarpOptions& o) {
     const size_t n = aux.size();
     // Algorithm 2 lines 6–7: w_i and ∂ω w_i, each divided by the vMF density of ω'_i.
@@ -96,7 +140,8 @@ PixelWarpEstimate estimate_pixel_warp(const Vec2f& x, std::span<const PixelAuxil
         w[i] = h.w * inv_pdf;
         g[i] = h.gradient * float(inv_pdf);
     }
-    const WarpCoefficients c = warp_coefficients(w, g, o);
+    const WarpCoefficients c = o.unbiased || !o.film_jackknife ? warp_coefficients(w, g, o)
+                                                                 : jackknife_coefficients(w, g, o.antithetic ? 2 : 1);
     Var vx(0.f), vy(0.f), divergence(0.f);
     for (size_t i = 0; i < n; ++i) {
         if (aux[i].warp.x.is_constant() && aux[i].warp.y.is_constant()) continue;

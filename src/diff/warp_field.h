@@ -33,6 +33,7 @@ struct WarpOptions {
     float rr_stop = 0.4f;   // unbiased: probability to stop after each batch, N_batches ~ Geom(rr_stop)
     int rr_batch = 4;       // unbiased: samples per batch (the telescoping sum runs over prefixes of batches)
     int rr_cap = 512; // unbiased: at most this many samples (the paper's cap; truncation bias beyond it)
+    bool film_jackknife = true; // consistent, on the film: the delete-a-group jackknife of the ratio
 };
 
 // One auxiliary ray: its direction and density, the boundary test at its hit and its direct warp.
@@ -85,6 +86,9 @@ struct WarpCoefficients {
 };
 WarpCoefficients warp_coefficients(std::span<const double> w, std::span<const Vec3f> grad_w,
                                    const WarpOptions& o);
+// The delete-a-group jackknife of Algorithm 2's ratio (groups of `group` consecutive samples: antithetic pairs
+// stay together), G F_N − (G − 1)/G Σ_k F_(−k): removes the ratio's O(1/N) bias, still linear in the V_i.
+WarpCoefficients jackknife_coefficients(std::span<const double> w, std::span<const Vec3f> grad_w, size_t group);
 
 // V(ω) and ∇·V(ω) on the sphere from the auxiliary samples (the coefficients above, with P(ω) and the
 // curvature term −2⟨ω, V⟩).
