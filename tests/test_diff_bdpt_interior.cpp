@@ -225,3 +225,19 @@ TEST(BdptInterior, ForwardAndReverseModeAreAdjoint) {
         << "⟨a, Jv⟩ = " << p.forward << ", ⟨Jᵀa, v⟩ = " << p.reverse;
     EXPECT_GT(p.scale, 1e-3);
 }
+
+namespace penumbra::test {
+
+// The derivative estimators take max_depth, rr_depth and hide_emitters from a bdpt integrator as from path
+// (they ignored it: psdr's boundary terms then sampled depths the image does not have).
+TEST(BdptInterior, PathSettingsComeFromTheBdptIntegrator) {
+    const auto scene = load_scene_string(R"(<scene version="3.0.0"><integrator type="bdpt">
+      <integer name="max_depth" value="3"/><integer name="rr_depth" value="7"/>
+      <boolean name="hide_emitters" value="true"/></integrator></scene>)");
+    const PathSettings s = path_settings(*scene);
+    EXPECT_EQ(s.max_depth, 3);
+    EXPECT_EQ(s.rr_depth, 7);
+    EXPECT_TRUE(s.hide_emitters);
+}
+
+} // namespace penumbra::test

@@ -7,6 +7,7 @@
 #include "diff/interior_media.h"
 #include "diff/material_form.h"
 #include "render/light_medium.h"
+#include "render/bdpt.h"
 #include "render/path.h"
 #include "render/volpath.h"
 #include "render/tiles.h"
@@ -20,6 +21,10 @@ namespace penumbra {
 PathSettings path_settings(const Scene& scene) {
     if (const auto* path = dynamic_cast<const PathIntegrator*>(scene.integrator.get())) return path->settings();
     if (const auto* volpath = dynamic_cast<const VolPathIntegrator*>(scene.integrator.get())) return volpath->settings();
+    if (const auto* bdpt = dynamic_cast<const BidirectionalPathTracer*>(scene.integrator.get())) {
+        const BDPTSettings& b = bdpt->settings();
+        return PathSettings{b.max_depth, b.rr_depth, b.hide_emitters};
+    }
     return PathSettings{};
 }
 

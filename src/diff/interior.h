@@ -43,7 +43,7 @@ struct Gradient {
     SampleCost cost;
 };
 
-// Path settings from the scene's `path` or `volpath` integrator (defaults otherwise).
+// Path settings from the scene's `path`, `volpath` or `bdpt` integrator (defaults otherwise).
 PathSettings path_settings(const Scene& scene);
 
 // Throws a clear Error for scenes with participating media (for methods that trace surfaces only).
