@@ -25,17 +25,10 @@ struct WarContext {
     BoundaryTest boundary;
     WarScene field;
     PathSettings settings;
-    float radians_per_pixel; // at the film's center
 
     WarContext(const Scene& s, const Parameters& p, const WarOptions& o)
         : scene(s), params(p), form(s, p, FirstVertex::Material),
-          boundary(s), field{s, p, form, boundary, o.field}, settings(o.path) {
-        const Film& film = *s.sensor->film;
-        const Vec2f center(0.5f * float(film.width), 0.5f * float(film.height));
-        const Vec3f d0 = s.sensor->sample_ray(center, Vec2f(0.5f)).first.d;
-        const Vec3f d1 = s.sensor->sample_ray(center + Vec2f(1.f, 0.f), Vec2f(0.5f)).first.d;
-        radians_per_pixel = 2.f * std::asin(std::min(1.f, 0.5f * norm(d1 - d0)));
-    }
+          boundary(s), field{s, p, form, boundary, o.field}, settings(o.path) {}
 };
 
 // The radiance of the infinite emitters along the escaped direction d warped on the sphere (value d, tangent
@@ -177,7 +170,7 @@ Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, WarRng& rng, in
                                         : c.form.environment(c.scene, ray.d) * Color3<Var>(ray_weight * w);
     }
     const WarNeighbor camera{Interaction3f{Infinity, ray.o, Vec3f(0.f)}, c.form.camera_position(ray.o),
-                             film.sample_border ? nullptr : &sensor, c.radians_per_pixel};
+                             film.sample_border ? nullptr : &sensor};
     WarVertex x1 = war_vertex(c.field, first, camera, rng, rays);
     const Vec3<Var> p_cam = c.form.to_reference_camera(x1.si.p, ray.o);
     const Vec3<Var> n_cam = c.form.direction_to_reference_camera(x1.si.n);

@@ -55,20 +55,15 @@ void for_each_projection(const Scene& scene, const Vec3f& q_prime, const Vec3f& 
     }
 }
 
-// The film's edge seen from the camera y: whether X(q) projects off the film, and then its B and v_dis.
+// The film's edge seen from the camera y: whether X(q) projects off the film (or lies behind the camera),
+// and then its v_dis (B stays 0).
 bool off_film(const WarScene& s, const WarNeighbor& y, const SurfaceInteraction3f& q, const Vec3f& direction,
-              float scale, WarAuxiliary& a) {
+              WarAuxiliary& a) {
     const Film& film = *y.camera->film;
     Vec2f f;
     float jacobian;
-    if (y.camera->film_position(q.p, q.n, f, jacobian) && f.x >= 0.f && f.y >= 0.f &&
-        f.x <= float(film.width) && f.y <= float(film.height))
-        return false;
-    if (!std::isfinite(f.x) || !std::isfinite(f.y)) return a.boundary = 1.f, true;
-    const float dx = std::max({-f.x, f.x - float(film.width), 0.f});
-    const float dy = std::max({-f.y, f.y - float(film.height), 0.f});
-    const double u = double(std::hypot(dx, dy)) * double(y.radians_per_pixel);
-    a.boundary = float(std::expm1(std::fmin(0.5 * double(scale) * u * u, 80.0)));
+    if (!y.camera->film_position(q.p, q.n, f, jacobian)) return true; // behind the camera: no motion known
+    if (f.x >= 0.f && f.y >= 0.f && f.x <= float(film.width) && f.y <= float(film.height)) return false;
     const Vec3<Var> d = s.form.direction_from_reference_camera(Vec3<Var>(direction));
     a.velocity = discontinuity_velocity(s.params, q, y.position, y.position + d);
     return true;
@@ -136,15 +131,13 @@ std::vector<WarAuxiliary> sample_war_auxiliary(const WarScene& s, const SurfaceI
             a.offset = q.p - p;
             a.pdf = pdf_prime * std::abs(dot(n, q.n)); // Eq. 46
             a.velocity = Vec3<Var>(Var(0.f));
+            a.boundary = 0.f; // invisible from y (occluded or off the film)
             const Ray ray = y.reference.spawn_ray_to(q.p);
-            if (y.camera && off_film(s, y, q, ray.d, scale, a)) return out.push_back(a);
+            if (y.camera && off_film(s, y, q, ray.d, a)) return out.push_back(a);
             // Visibility of X(q) from y: the first occluder x″ of the segment (§3.2.2 Step 1).
             ++rays;
             const SurfaceInteraction3f occluder = s.scene.intersect(ray);
             if (occluder.is_valid()) {
-                const bool front = dot(q.n, y.reference.p - q.p) > 0.f;
-                a.boundary =
-                    front ? s.boundary(occluder, ray.o, ray.d, scale) : s.boundary(q, ray.o, ray.d, scale);
                 const Vec3<Var> x_o = auxiliary_point(s.form, s.boundary, occluder, ray.o, ray.d);
                 a.velocity = discontinuity_velocity(s.params, q, y.position, x_o);
             } else {

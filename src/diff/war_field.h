@@ -8,26 +8,33 @@
 //   v_dis(q) = ∂θ X⁻¹(z, θ) with z = rayIntersect(y → x_O, M) for an occluder x_O of segment y–X(q),
 //              and 0 where X(q) is visible from y                                         (§3.2.2 Step 1,
 //              Fig. 9)
-//   B(q) = 1 where X(q) is visible from y; otherwise a boundary distance that vanishes at the visibility
-//          boundary: at the occluder x″ for a front-facing X(q), at X(q) itself for a back-facing one (Eq.
-//          18, Fig. 7).
+//   B(q) = 0 where X(q) is invisible from y; where it is visible, penumbra's boundary test at q seen from y
+//          (diff/boundary_test.h, capped at 1), which vanishes at q's own open edges and silhouettes.
 // The text extraction writes Eq. 16 with its exponent outside the bracket: D = [(1/σ)(1 − e^{−r²/σ})]^α would
 // double-count α with the weight; the NOTES' third-party port reads D as above with the weight 1/(D^α + B).
-// B_dist (Eq. 18) is min(|⟨ω, n⟩|, distance to an open boundary); for triangle meshes penumbra's boundary
-// test (diff/boundary_test.h) with its distance term plays that role: the normal term at smooth silhouettes,
-// and e^{s u²/2} − 1 for the angle u seen from y to the nearest silhouette or open edge, with s = 2/σ0² so
-// that it is D's own scale (D ≈ u²/σ0² for a small angle, r ≈ u). B then vanishes like u² at the boundary and
-// ∫ w diverges there (∫ dt / (t⁶ + u²) ~ u^{-5/3} over the occluded side), so v takes the boundary's
-// velocity.
+// The paper's B (Eq. 18, Fig. 7) is 1 on the visible side and B_dist = min(|⟨ω, n⟩|, distance to an open
+// boundary) at the occluder on the invisible side. Two departures, by measurement (docs/war.md):
+//  - on the invisible side B = 0, so w = D^{−α} there. Any B that vanishes at the boundary like the distance
+//    u to it (or its square) puts the invisible side's weight, for p at a distance ε < σ from the boundary,
+//    in a sliver u < ε³/σ² next to it that Gaussian auxiliary points almost never reach: the self-normalized
+//    field then falls short of v_dis at the boundary (on a synthetic half plane, N_q = 16: 0.67 of it, and
+//    the flux ∫ ∇·v 0.88 of v_dis; with B = 0: 0.95), and the validation shadows came out 10–40% low. With B
+//    = 0 the weight near p's nearest boundary point is a blob of size ε, and the field still equals v_dis at
+//    the boundary (∫ D^{−3} over a half disc at p diverges);
+//  - on the visible side B vanishes at q's own open edges and silhouettes (§3.2.1's C.1 and C.2: static in
+//    material space, so v·n must vanish there, yet f̂ jumps across them, e.g. at an area light's edge).
+// A thin shell (two surfaces closer than ~σ0 r0, one of them occluded) would weight its far side's velocity
+// heavily: the limit of B = 0.
 //
 // Sampling q (Fig. 10, Eqs. 44–46): q′ ~ N(p, s² I) in the tangent plane of p (s = spread · r0), projected
 // along n(p) onto every surface the normal line meets within reach · r0 of the plane; each projection q has
 // the area density pdf(q′) |⟨n(p), n(q)⟩|. Algorithm 1 gives W, ∇W, ṽ and ∇·ṽ from the same samples and
 // v = ṽ/W, ∇·v = ∇·ṽ/W − ⟨∇W, ṽ⟩/W² (Eqs. 47, 62; paper 004's warp_coefficients). The gradient ∇_p w is
-// taken with q fixed (w depends on p through r and r0); the paper's Algorithm 1 line 16 adds w ∇·v_dis, the
-// form one gets with q = p + t integrated over the offset t instead: both have the same expectation.
-// Projections beyond reach · r0 are left out: their D is ≥ (1/σ)(1 − e^{−reach²/σ}), their weight below
-// σ^α ≈ 2e-7 of a near sample's.
+// taken with q fixed (w depends on p through r and r0): the exact divergence of the estimated field for the
+// sampled q. The paper's Algorithm 1 line 16 (∇w·v_dis + w ∇·v_dis) is the form for q = p + t with the
+// offsets t held fixed; there ∇w includes ∇B and ∇·v_dis a delta where v_dis jumps, which point samples
+// cannot see. Projections beyond reach · r0 are left out: their D is ≥ (1/σ)(1 − e^{−reach²/σ}), their weight
+// below σ^α ≈ 2e-7 of a near sample's.
 //
 // The field lives in B's tangent plane at p (triangles are flat: no curvature term). Applied to a vertex, it
 // moves the material point, p(θ) = p + (θ − θ0) v(p), and multiplies the integrand by 1 + (θ − θ0) ∇·v, so
@@ -109,13 +116,12 @@ struct WarScene {
 // The neighbour p_{K+1} the field is conditioned on: its reference point (to spawn rays; n = 0 at a camera)
 // and its material motion y(θ) = X(p_{K+1}, θ) (without its own warp: p_{K+1} is held fixed). At the camera
 // the film's edge bounds what it sees as occluders do (a pixel's filter is cut there unless the film samples
-// its border): points projecting off the film are invisible, with B the distance to the film's edge in
-// radians on D's scale and v_dis the motion that keeps their film position (z on the camera ray through it).
+// its border): points projecting off the film are invisible, with v_dis the motion that keeps their film
+// position (z on the moving camera's ray through it).
 struct WarNeighbor {
     Interaction3f reference;
     Vec3<Var> position;
     const Sensor* camera = nullptr; // set when p_{K+1} is the camera and its film's edge cuts the filters
-    float radians_per_pixel = 0.f;
 };
 
 // Algorithm 1 lines 5–12 at the surface vertex `hit`: the auxiliary points with their boundary test and
