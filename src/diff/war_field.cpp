@@ -2,6 +2,7 @@
 
 #include "diff/auxiliary_rays.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace penumbra {
@@ -36,6 +37,32 @@ Vec3<Var> discontinuity_velocity(const Parameters& params, const SurfaceInteract
     const Var b1 = tangent_part(dot(s, a) * inv_det), b2 = tangent_part(dot(d, r) * inv_det);
     const std::vector<Vec3f>& x = q.shape->mesh.positions;
     return Vec3<Var>(x[i[1]] - x[i[0]]) * b1 + Vec3<Var>(x[i[2]] - x[i[0]]) * b2;
+}
+
+// The point of the occluder's triangle edges nearest to the ray from `origin` along the unit `direction` (in
+// angle seen from the origin), moving with the mesh: near a visibility boundary the ray grazes the occluder's
+// silhouette edge, and this point follows that edge (the boundary's own motion) where the hit's material
+// point, on a face seen at a grazing angle, lies far along the face and moves differently.
+Vec3<Var> nearest_edge_point(const MaterialForm& form, const SurfaceInteraction3f& hit, const Vec3f& origin,
+                             const Vec3f& direction) {
+    const uint32_t* i = &hit.shape->mesh.indices[3 * size_t(hit.prim_index)];
+    const std::vector<Vec3f>& x = hit.shape->mesh.positions;
+    float best = Infinity, best_s = 0.f;
+    int best_edge = 0;
+    for (int k = 0; k < 3; ++k) {
+        const Vec3f a = x[i[k]], e = x[i[(k + 1) % 3]] - a, w0 = a - origin;
+        // The closest approach of the segment a + s e (s in [0, 1]) to the line origin + t direction.
+        const float ee = dot(e, e), ed = dot(e, direction), denominator = ee - ed * ed;
+        const float s = denominator > 1e-12f * ee
+                            ? std::clamp((ed * dot(direction, w0) - dot(e, w0)) / denominator, 0.f, 1.f)
+                            : 0.f;
+        const Vec3f c = a + e * s - origin;
+        const float length = norm(c);
+        const float sine = length > 0.f ? norm(c - direction * dot(c, direction)) / length : 0.f;
+        if (sine < best) best = sine, best_s = s, best_edge = k;
+    }
+    return form.position(*hit.shape, i[best_edge]) * Var(1.f - best_s) +
+           form.position(*hit.shape, i[(best_edge + 1) % 3]) * Var(best_s);
 }
 
 // All projections of q′ along n within `reach` of the tangent plane (Fig. 10).
@@ -138,7 +165,12 @@ std::vector<WarAuxiliary> sample_war_auxiliary(const WarScene& s, const SurfaceI
             ++rays;
             const SurfaceInteraction3f occluder = s.scene.intersect(ray);
             if (occluder.is_valid()) {
-                const Vec3<Var> x_o = auxiliary_point(s.form, s.boundary, occluder, ray.o, ray.d);
+                // x_O's motion: the nearest edge's (or an implicit edge's, where the occluder crosses a
+                // surface).
+                const ImplicitEdges* implicit = s.boundary.implicit_edges();
+                const Vec3<Var> x_o = implicit && implicit->nearest(occluder, ray.o, ray.d).segment
+                                          ? auxiliary_point(s.form, s.boundary, occluder, ray.o, ray.d)
+                                          : nearest_edge_point(s.form, occluder, ray.o, ray.d);
                 a.velocity = discontinuity_velocity(s.params, q, y.position, x_o);
             } else {
                 // Visible: v_dis = 0, and B vanishes at q's own open edges and silhouettes seen from y (C.1,
