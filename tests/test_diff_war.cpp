@@ -105,24 +105,18 @@ void PrintTo(const WarCase& c, std::ostream* os) { *os << c.label; }
 
 class WarBoundaryScenes : public testing::TestWithParam<WarCase> {};
 
-// Cases the estimator does not pass at the defaults (N_q = 16, σ0 = 0.006, α = 3, spread 2 σ0): reported as
+// Cases the estimator does not pass at the defaults (N_q = 64, σ0 = 0.006, α = 3, spread 2 σ0): reported as
 // skipped, never as passed. Measured at 16 × 16, 1024 spp (16 batches), seed 0 (docs/war.md): silhouette
-// relerr4 0.21 against a noise expectation of 0.10, z +2.2 (relerr4 0.090 at 4096 spp, the test's budget ×
-// 4); shadow 4.5% of the 2 × 2 blocks beyond 4σ (mean −0.0069 against −0.0070, but −0.0037 and −0.0082 with
-// seeds 1 and 2: heavy tails); glossy shadow 4.7% of the blocks beyond 4σ (means −0.057, −0.033, −0.024
-// against −0.062 for seeds 0, 1, 2); self shadow z −3.7, 5.7% of the blocks beyond 4σ (mean −0.0124 against
-// −0.0107); camera mean 0.0095 against 0.0194 (z −3.6: the film-edge field adds almost nothing to the
-// interior term's 0.0091). The two enabled cases pass at seed 0 and are marginal: with PENUMBRA_TEST_SEED=1
-// the moving light has 3.3% of its blocks beyond 4σ, with 2 the sky 2.7%; at 2048 spp the moving light's mean
-// is 5% low (z −1.8 to −2.5 over seeds 0–2).
+// relerr4 0.175 against 1.5 × its noise expectation 0.099 + 0.02 = 0.169, z +1.7; camera mean 0.0096 against
+// 0.0194, z −3.6 (the interior term alone gives 0.0091). The glossy shadow passes (relerr4 0.18 against noise
+// 0.20, z +1.7, 1.2% of the 2 × 2 blocks beyond 4σ) but takes ~20 s: left out of CI for time. The enabled
+// cases also pass with PENUMBRA_TEST_SEED=1; the shadow's mean is −0.0048 (seed 1: −0.0045) against −0.0070,
+// z +2.7 (+3.1): within the check, but a bias (docs/war.md, Open).
 const char* not_passing(const std::string& label) {
-    if (label == "silhouette")
-        return "biased near the rotating cube's silhouette (relerr4 0.21 vs noise 0.10)";
-    if (label == "shadow")
-        return "heavy tails: 4.5% of the 2x2 blocks beyond 4 sigma, seed means -0.0037..-0.0082";
-    if (label == "glossy_shadow") return "heavy tails: 4.7% of the 2x2 blocks beyond 4 sigma";
-    if (label == "self_shadow") return "biased high: mean -0.0124 vs -0.0107, z -3.7";
-    if (label == "camera") return "the film-edge boundary is missed (mean 0.0095 vs 0.0194)";
+    if (label == "silhouette") return "biased near the rotating cube's silhouette (relerr4 0.175 vs 0.169)";
+    if (label == "camera") return "the camera motion is underestimated (mean 0.0096 vs 0.0194)";
+    if (label == "glossy_shadow")
+        return "passes (relerr4 0.18, z 1.7, 1.2% blocks) but slow: left out for time";
     return nullptr;
 }
 
@@ -141,13 +135,17 @@ TEST_P(WarBoundaryScenes, MatchesFiniteDifferences) {
 INSTANTIATE_TEST_SUITE_P(Validation, WarBoundaryScenes, testing::ValuesIn(cases),
                          [](const testing::TestParamInfo<WarCase>& info) { return info.param.label; });
 
-// war and psdr estimate the same derivative: their difference is noise (the light moving over the blocker).
+// war and psdr estimate the same derivative: their difference is noise (the light moving over the blocker;
+// war at N_q = 16, the faster setting, which passes here).
 TEST(WarBoundaryScenes, AgreesWithPsdr) {
     Loaded l = load(cases[5]);
-    const MethodDerivative w = war(l, Spp, 21);
+    MethodOptions o;
+    o.set("war-aux", "16");
     MethodRun run;
     run.spp = Spp;
     run.batches = 16;
+    run.seed = 21;
+    const MethodDerivative w = make_method("war", o)->derivative(*l.scene, *l.params, run);
     run.seed = 22;
     const MethodDerivative p = make_method("psdr", MethodOptions())->derivative(*l.scene, *l.params, run);
     const DiffCheck check = check_against(w.derivative, w.stderr_img, p.derivative, p.stderr_img);

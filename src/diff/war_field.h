@@ -53,7 +53,7 @@
 namespace penumbra {
 
 struct WarFieldOptions {
-    int aux_count = 16;     // N_q (Algorithm 1)
+    int aux_count = 64;     // N_q (Algorithm 1): by measurement (docs/war.md)
     float sigma = 0.006f;   // σ0 of the distance D (paper: 0.006)
     float exponent = 3.f;   // α (paper: 3)
     float spread = 0.012f;  // standard deviation of q′ in units of r0: 2 σ0 by measurement (docs/war.md)

@@ -76,7 +76,13 @@ MethodInfo war_method_info() {
         "war",
         "warped-area reparameterization of paper 000: path tracing with NEE in material form, each vertex "
         "warped by a continuous velocity field (no boundary sampling; surfaces, continuous pixel filters)",
-        {{"war-aux", Type::Int, "auxiliary points N_q per warped vertex (default 16)", {}, 2, 4096},
+        {{"war-aux",
+          Type::Int,
+          "auxiliary points N_q per warped vertex (default 64: the consistent field is biased at 16, "
+          "docs/war.md)",
+          {},
+          2,
+          4096},
          {"war-sigma",
           Type::Float,
           "sigma of the distance D(q, p) = (1 - exp(-r^2/sigma)) / sigma, r = |q - p| / |x - y| (default "
