@@ -113,5 +113,6 @@ MethodInfo interior_method_info();
 MethodInfo psdr_method_info();
 MethodInfo paths_method_info();
 MethodInfo was_method_info();
+MethodInfo war_method_info();
 
 } // namespace penumbra

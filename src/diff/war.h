@@ -1,0 +1,51 @@
+// The unidirectional estimator of warped-area reparameterization in material path space (paper 000 §5.2.1,
+// Algorithm 2): the reparameterized differential path integral (Eq. 38)
+//   dI/dθ = ∫ ( d f̂(p̄)/dθ + Σ_{K=0}^{N−1} [∇·(f̂_K v_K)](p_K) ) dμ(p̄)
+// estimated by path tracing with next-event estimation in material form (paper 001), with no boundary
+// sampling. Path vertices are indexed from the light (x_0) to the camera (x_N); each vertex p_K but the
+// camera's carries the field v_K of diff/war_field.h conditioned on its detector-side neighbour p_{K+1}:
+//   p^D_1 (first hit)   on the camera's position (primary visibility);
+//   p^D_{n+1}           on p^D_n (the vertex found by BSDF sampling, emitters included);
+//   p^S_n (NEE)         on p^D_n (the light point of next-event estimation).
+// A warped vertex is evaluated at p(θ) = p + (θ − θ0) v(p) with the factor 1 + (θ − θ0) ∇·v in its area
+// Jacobian, so the tape's derivative of the path contribution is d f̂/dθ + Σ_K ∇·(f̂ v_K) = Eq. 48 × pdf.
+// Eqs. 49–51 factor f̂ out of the divergence sum, Σ_K [∇ĝ_K/ĝ_K · v_K + ∇·v_K], and keep its prefix sum Σ^D_n
+// along the detector subpath so that each NEE path costs O(1); on the tape that prefix sum is the tangent of
+// the detector subpath's throughput: each vertex's warp is put on the tape once, when the vertex is sampled,
+// and every NEE path through it reuses it (the throughput's tangent is Σ^D_n × throughput). Forward mode
+// propagates the tangents once per path, reverse mode runs one adjoint pass per path: O(1) work per vertex
+// and per connection, whatever the path length. diff/war_field.h's war_vertex serves any path sampler (a
+// bidirectional one warps the source subpath's vertices conditioned on their detector-side neighbour too).
+//
+// Not covered: delta lights (no integral to warp at the light: the motion of point, spot and directional
+// lights' shadows is missed, as in paper 004), vertices after a delta BSDF lobe (no area integral there),
+// and the environment seen directly through the film (its direction is not warped: the silhouettes of moving
+// objects against it are missed). Surfaces only; a continuous reconstruction filter is required (a box
+// filter's jumps at pixel edges are discontinuities of f̂ that no field moves).
+#pragma once
+#include "diff/interior.h"
+#include "diff/war_field.h"
+
+namespace penumbra {
+
+struct WarOptions {
+    WarFieldOptions field;
+    int spp = 16; // samples per pixel (per batch)
+    int batches = 1;
+    uint64_t seed = 0;
+    int threads = 0;
+    PathSettings path;
+    std::function<void(float)> progress;
+};
+
+// Throws a clear Error for what the estimator cannot differentiate (media, sensors without one center of
+// projection, discontinuous pixel filters).
+void require_war_support(const Scene& scene, const Parameters& params);
+
+// Forward mode: dI/dθ along params.direction() (with per-pixel standard errors over the batches).
+DerivativeImage war_derivative(const Scene& scene, const Parameters& params, const WarOptions& options);
+// Reverse mode: dL/dθ = Σ_pixels adjoint · dI/dθ for every enabled parameter scalar.
+Gradient war_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                      const WarOptions& options);
+
+} // namespace penumbra

@@ -1,0 +1,110 @@
+// The method `war`: the unidirectional estimator of warped-area reparameterization in material path space
+// (paper 000, diff/war.h) behind the common front of diff/method.h. One term: the whole derivative (interior
+// and boundary together).
+#include "diff/method.h"
+#include "diff/war.h"
+
+#include <cstdio>
+
+namespace penumbra {
+
+namespace {
+
+class WarMethod final : public DerivativeMethod {
+  public:
+    explicit WarMethod(const MethodOptions& o) {
+        WarFieldOptions& f = base_.field;
+        f.aux_count = o.get_int("war-aux", f.aux_count);
+        f.sigma = float(o.get_float("war-sigma", f.sigma));
+        f.exponent = float(o.get_float("war-exponent", f.exponent));
+        f.spread = float(o.get_float("war-spread", f.spread));
+        f.antithetic = !o.get_bool("no-antithetic", false);
+        f.directions.antithetic = f.antithetic;
+        char text[160];
+        std::snprintf(text, sizeof(text),
+                      "warped-area reparameterization (unidirectional), N_q = %d, sigma = %g, alpha = %g, "
+                      "spread = %g%s",
+                      f.aux_count, double(f.sigma), double(f.exponent), double(f.spread),
+                      f.antithetic ? ", antithetic" : "");
+        name_ = text;
+    }
+
+    MethodDerivative derivative(const Scene& scene, const Parameters& params, const MethodRun& run) override {
+        const DerivativeImage d = war_derivative(scene, params, options(scene, run, run.batches));
+        MethodDerivative out;
+        out.derivative = d.derivative;
+        out.stderr_img = d.stderr_img;
+        out.terms.push_back({"warped-area", d.derivative, d.stderr_img});
+        out.description = name_;
+        out.seconds = d.seconds;
+        return out;
+    }
+
+    MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                            const MethodRun& run) override {
+        const Gradient g = war_gradient(scene, params, adjoint, options(scene, run, 1));
+        MethodGradient out;
+        out.values = g.values;
+        out.primal = g.primal;
+        out.warnings = g.warnings;
+        out.description = name_;
+        out.seconds = g.seconds;
+        return out;
+    }
+
+  private:
+    WarOptions options(const Scene& scene, const MethodRun& run, int batches) const {
+        WarOptions o = base_;
+        o.batches = batches;
+        o.spp = std::max(1, run.spp / batches);
+        o.seed = run.seed;
+        o.threads = run.threads;
+        o.path = path_settings(scene);
+        o.progress = run.progress;
+        return o;
+    }
+
+    WarOptions base_;
+    std::string name_;
+};
+
+} // namespace
+
+MethodInfo war_method_info() {
+    using Type = MethodOption::Type;
+    return {
+        "war",
+        "warped-area reparameterization of paper 000: path tracing with NEE in material form, each vertex "
+        "warped by a continuous velocity field (no boundary sampling; surfaces, continuous pixel filters)",
+        {{"war-aux",
+          Type::Int,
+          "auxiliary points N_q per warped vertex (default 64: the consistent field is biased at 16, "
+          "docs/war.md)",
+          {},
+          2,
+          4096},
+         {"war-sigma",
+          Type::Float,
+          "sigma of the distance D(q, p) = (1 - exp(-r^2/sigma)) / sigma, r = |q - p| / |x - y| (default "
+          "0.006, the paper's)",
+          {},
+          1e-5,
+          1.0},
+         {"war-exponent",
+          Type::Float,
+          "exponent alpha of the weight 1 / (D^alpha + B) (default 3, the paper's)",
+          {},
+          1.0,
+          8.0},
+         {"war-spread",
+          Type::Float,
+          "standard deviation of the tangent-plane Gaussian of auxiliary points, in units of |x - y| "
+          "(default 0.012 = 2 sigma, by measurement: docs/war.md)",
+          {},
+          1e-5,
+          1.0},
+         {"no-antithetic", Type::Bool, "independent auxiliary points instead of point-reflected pairs", {}}},
+        [](const MethodOptions& o) { return std::make_unique<WarMethod>(o); }};
+}
+
+} // namespace penumbra
