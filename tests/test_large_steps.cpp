@@ -2,6 +2,7 @@
 // meshes where it is known by hand, the solve inverting it on a real mesh, the chain rule of the latent
 // gradient against central finite differences of a quadratic, and the errors.
 #include "core/error.h"
+#include "optim/adam.h"
 #include "optim/large_steps.h"
 #include "scene/mesh.h"
 
@@ -125,6 +126,22 @@ TEST(LargeSteps, LatentGradientMatchesFiniteDifferencesOfAQuadratic) {
     for (size_t k = 0; k < u.size(); ++k)
         dot_wrong += grad_x[k] * directions[0][k], dot_right += grad_u[k] * directions[0][k];
     EXPECT_GT(std::abs(dot_wrong - dot_right), 1e-3 * std::abs(dot_right));
+}
+
+// Uniform Adam (one second moment per group, Nicolet et al. 2021 §5): the first step is −lr g / max|g|, the
+// gradient's direction, where per-scalar Adam steps −lr sign(g); a group that is not uniform is unchanged.
+TEST(LargeSteps, UniformAdamKeepsTheGradientDirection) {
+    const std::vector<double> g = {0.5, -2.0, 0.25, 1.0};
+    AdamGroup uniform{"u", 0, 2, 0.1};
+    uniform.uniform = true;
+    Adam adam({uniform, AdamGroup{"s", 2, 2, 0.1}}, 4);
+    std::vector<double> x(4, 0.0);
+    adam.step(x, g);
+    // Bias-corrected moments after one step: m̂ = g, v̂ = g²; ε = 1e-8 shifts a step by ≤ lr ε / 0.25 = 4e-9.
+    EXPECT_NEAR(x[0], -0.1 * 0.5 / 2.0, 1e-8);
+    EXPECT_NEAR(x[1], -0.1 * -2.0 / 2.0, 1e-8);
+    EXPECT_NEAR(x[2], -0.1, 1e-8);
+    EXPECT_NEAR(x[3], -0.1, 1e-8);
 }
 
 TEST(LargeSteps, Errors) {

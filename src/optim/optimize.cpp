@@ -149,7 +149,12 @@ OptimizedParameter parse_parameter(const std::string& name, const json& j, const
             throw Error(source + ": key '" + q.path("type") + "': unknown parameterization '" + type +
                         "' (expected: large_steps)");
         p.large_steps_lambda = q.number("lambda", 19.0);
-        if (!(p.large_steps_lambda > 0.0)) throw Error(source + ": key '" + q.path("lambda") + "' must be positive");
+        if (const json* u = q.find("uniform_adam", false)) {
+            if (!u->is_boolean()) q.fail("uniform_adam", "a boolean", *u);
+            p.uniform_adam = u->get<bool>();
+        }
+        if (!(p.large_steps_lambda > 0.0))
+            throw Error(source + ": key '" + q.path("lambda") + "' must be positive");
         q.finish();
     }
     o.finish();
@@ -180,10 +185,11 @@ OptimizeConfig parse_optimize_config(const json& j, const std::string& base_dir,
 
     if (const json* views = root.find("views", false)) c.views = parse_views(*views, base_dir, source);
     c.views_per_iteration = int(root.integer("views_per_iteration", 0, 0));
-    const size_t view_images = size_t(std::count_if(c.views.begin(), c.views.end(),
-                                                    [](const ViewSpec& v) { return !v.target_image.empty(); }));
+    const size_t view_images = size_t(std::count_if(
+        c.views.begin(), c.views.end(), [](const ViewSpec& v) { return !v.target_image.empty(); }));
     if (view_images > 0 && view_images < c.views.size())
-        throw Error(source + ": key 'views': give every view its target 'image', or none (a rendered target)");
+        throw Error(source +
+                    ": key 'views': give every view its target 'image', or none (a rendered target)");
     if (view_images > 0) {
         if (root.has("target"))
             throw Error(source + ": key 'target': the views give their target images; remove 'target'");
@@ -535,17 +541,17 @@ OptimizeResult optimize(const OptimizeConfig& config,
         std::vector<double> gradient(size_t(problem.dimension()), 0.0);
         for (size_t v : subset) {
             views.select(v);
-            const Image primal = render_image(*scene, config.spp, view_stream(config.seed, 2 * uint64_t(it) + 1, v),
-                                              config.threads);
+            const Image primal = render_image(
+                *scene, config.spp, view_stream(config.seed, 2 * uint64_t(it) + 1, v), config.threads);
             const LossResult loss = compute_loss(config.loss, primal, targets[v]);
             loss_sum += loss.value;
             if (config.snapshot_every > 0 && it % config.snapshot_every == 0)
-                write_image((out / view_file(snapshot_name(it), ".png", config, views, v)).string(),
-                            primal);
+                write_image((out / view_file(snapshot_name(it), ".png", config, views, v)).string(), primal);
             run.seed = view_stream(config.seed, 2 * uint64_t(it) + 2, v);
             const std::vector<double> g = problem.gradient(
                 loss.adjoint, *method, run, it == 0 && v == subset[0] ? &result.description : nullptr);
-            for (size_t k = 0; k < g.size(); ++k) gradient[k] += g[k] / double(subset.size());
+            for (size_t k = 0; k < g.size(); ++k)
+                gradient[k] += g[k] / double(subset.size());
         }
         IterationRecord record = record_at(it, loss_sum / double(subset.size()));
         // Exponential schedule: the rates fall to lr_decay × lr at the last iteration.
@@ -565,7 +571,8 @@ OptimizeResult optimize(const OptimizeConfig& config,
         views.select(v);
         write_image((out / view_file("final", ".png", config, views, v)).string(),
                     render_image(*scene, config.spp,
-                                 view_stream(config.seed, 2 * uint64_t(config.iterations) + 1, v), config.threads));
+                                 view_stream(config.seed, 2 * uint64_t(config.iterations) + 1, v),
+                                 config.threads));
     }
     const std::vector<double> x_final = problem.values();
     for (size_t i = 0; i < problem.entries().size(); ++i) {
@@ -580,7 +587,8 @@ OptimizeResult optimize(const OptimizeConfig& config,
                 pr.pose_error = problem.entry_error(i, truth);
         }
         if (e.shape)
-            write_ply_mesh((out / ("final_" + shape_of(e.name) + ".ply")).string(), pr.final, e.shape->mesh.indices);
+            write_ply_mesh((out / ("final_" + shape_of(e.name) + ".ply")).string(), pr.final,
+                           e.shape->mesh.indices);
         result.parameters.push_back(std::move(pr));
     }
     if (known_truth) {

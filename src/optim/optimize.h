@@ -6,16 +6,19 @@
 //   defines         object     <default> overrides, name → string or number
 //   parameters      object     name → {"init": number | [values], "lr": number,
 //                              "bounds": [lo | null, hi | null]} ("init" defaults to the scene's value,
-//                              "bounds" to none). A pose is "<shape>.translate" (3 values, world units) and/or "<shape>.rotate" (a
-//                              rotation vector in degrees about the shape's bounding-box center, no bounds),
-//                              both relative to the scene's pose (optim/problem.h); "<shape>.deform@cx,cy,cz"
-//                              a deformation handle at c (3 values, its displacement, world units; several
-//                              per shape, not with a pose; optim/deformation.h)
-//                              "parameterization": {"type": "large_steps", "lambda": λ (default 19)}:
-//                              a <shape>.vertex_positions stepped in u = (I + λL) x (optim/large_steps.h; no
-//                              bounds, no free mask). "init" (and a target value) of a vertex_positions may
-//                              be a mesh file (.ply/.obj, relative to the configuration, same vertex count
-//                              and order): its positions as stored
+//                              "bounds" to none). A pose is "<shape>.translate" (3 values, world units)
+//                              and/or "<shape>.rotate" (a rotation vector in degrees about the shape's
+//                              bounding-box center, no bounds), both relative to the scene's pose
+//                              (optim/problem.h); "<shape>.deform@cx,cy,cz" a deformation handle at c (3
+//                              values, its displacement, world units; several per shape, not with a pose;
+//                              optim/deformation.h).
+//                              "parameterization": {"type": "large_steps", "lambda": λ (default 19),
+//                              "uniform_adam": bool (default true)}: a <shape>.vertex_positions stepped in
+//                              u = (I + λL) x (optim/large_steps.h; no bounds, no free mask), by Adam with
+//                              one second moment for the whole mesh (optim/adam.h) unless uniform_adam is
+//                              false. "init" (and a target value) of a vertex_positions may be a mesh file
+//                              (.ply/.obj, relative to the configuration, same vertex count and order): its
+//                              positions as stored
 //   target          object     {"image": path relative to the configuration}  or
 //                              {"values": {name → number | [values] | mesh}, "spp": int}: the same scene with
 //                              these values of optimized parameters (the others keep the scene's), rendered
@@ -41,7 +44,8 @@
 //   loss            string     "l2" (default) | "rel_l2"
 //   iterations      int        number of Adam steps
 //   spp             int        samples per pixel of the primal image of each iteration
-//   gradient_spp    int        samples per pixel of the gradient (see primary_spp), independent of the primal's
+//   gradient_spp    int        samples per pixel of the gradient (see primary_spp), independent of the
+//                              primal's
 //   seed            int        base seed (default 0)
 //   output          string     output directory (default "optimize_out"), relative to the working directory
 //   snapshot_every  int        write iter_NNNN.png (several views: iter_NNNN_<view>.png) every N iterations

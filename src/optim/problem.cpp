@@ -55,11 +55,13 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
             }
             if (op.large_steps_lambda > 0) {
                 if (!e.shape || size_t(p.size) != 3 * e.shape->mesh.vertex_count())
-                    throw Error("parameter '" + op.name +
-                                "': the large-steps parameterization applies to a shape's vertex_positions only");
+                    throw Error(
+                        "parameter '" + op.name +
+                        "': the large-steps parameterization applies to a shape's vertex_positions only");
                 if (std::isfinite(op.lower) || std::isfinite(op.upper) || !op.free.empty())
                     throw Error("parameter '" + op.name +
                                 "': the large-steps parameterization takes no bounds and no 'free' mask");
+                e.uniform_adam = op.uniform_adam;
                 e.large_steps = std::make_shared<const LargeSteps>(
                     e.shape->mesh.indices, int(e.shape->mesh.vertex_count()), op.large_steps_lambda);
             }
@@ -145,7 +147,8 @@ InverseProblem::~InverseProblem() = default;
 std::vector<AdamGroup> InverseProblem::adam_groups() const {
     std::vector<AdamGroup> groups;
     for (const Entry& e : entries_)
-        groups.push_back({e.name, e.offset, e.size, e.learning_rate, e.lower, e.upper});
+        groups.push_back(
+            {e.name, e.offset, e.size, e.learning_rate, e.lower, e.upper, e.large_steps && e.uniform_adam});
     return groups;
 }
 

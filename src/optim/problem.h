@@ -33,6 +33,7 @@ struct OptimizedParameter {
     std::vector<bool> free = {}; // which components are optimized (empty: all); the others keep their init
     // > 0: a <shape>.vertex_positions stepped in u = (I + λL) x, λ this value (optim/large_steps.h)
     double large_steps_lambda = 0;
+    bool uniform_adam = true; // large steps: Adam with one second moment for the parameter (optim/adam.h)
 };
 
 // ‖a − b‖ / ‖b‖ (‖a − b‖ when b = 0).
@@ -52,6 +53,7 @@ class InverseProblem {
         std::vector<bool> free = {};       // size components: whether each is optimized
         const Shape* shape = nullptr;      // <shape>.vertex_positions: the shape
         std::shared_ptr<const LargeSteps> large_steps = nullptr; // its large-steps parameterization, or null
+        bool uniform_adam = false;                               // large steps: uniform Adam (optim/adam.h)
     };
 
     // Resolves the names against the scene. Throws Error for unknown names, camera motions, scaling, a
