@@ -552,6 +552,11 @@ OptimizeResult optimize(const OptimizeConfig& config,
                 loss.adjoint, *method, run, it == 0 && v == subset[0] ? &result.description : nullptr);
             for (size_t k = 0; k < g.size(); ++k)
                 gradient[k] += g[k] / double(subset.size());
+            if (const auto bad = std::find_if(g.begin(), g.end(), [](double d) { return !std::isfinite(d); });
+                bad != g.end())
+                throw Error("iteration " + std::to_string(it) + ", view '" + views.view(v).name +
+                            "': method '" + result.method + "' returned a non-finite gradient (scalar " +
+                            std::to_string(bad - g.begin()) + ")");
         }
         IterationRecord record = record_at(it, loss_sum / double(subset.size()));
         // Exponential schedule: the rates fall to lr_decay × lr at the last iteration.
