@@ -12,6 +12,7 @@ namespace penumbra::cli {
 namespace {
 
 std::string format_values(const std::vector<double>& v) {
+    if (v.size() > 64) return "[" + std::to_string(v.size()) + " values]"; // a mesh: see final_<shape>.ply
     std::string s;
     for (double x : v) {
         char buf[32];
@@ -24,10 +25,11 @@ std::string format_values(const std::vector<double>& v) {
 void print_summary(const OptimizeConfig& config, const OptimizeResult& result) {
     const double loss = result.history.empty() ? NAN : result.history.back().loss;
     std::fprintf(stderr,
-                 "%s: %d iterations in %.1f s (%.2f s/iteration; target %.1f s); last loss %.4g -> %s\n",
+                 "%s: %d iterations in %.1f s (%.2f s/iteration; target %.1f s); last loss %.4g; peak memory "
+                 "%.0f MB -> %s\n",
                  result.method.c_str(), config.iterations, result.seconds,
                  config.iterations ? result.seconds / config.iterations : 0.0, result.target_seconds, loss,
-                 config.output.c_str());
+                 result.peak_memory_mb, config.output.c_str());
     if (!result.description.empty()) std::fprintf(stderr, "  gradient: %s\n", result.description.c_str());
     for (const ParameterResult& p : result.parameters) {
         std::fprintf(stderr, "  %-28s %s -> %s", p.name.c_str(), format_values(p.initial).c_str(),
@@ -43,6 +45,10 @@ void print_summary(const OptimizeConfig& config, const OptimizeResult& result) {
     if (std::isfinite(result.final_parameter_error))
         std::fprintf(stderr, "parameter error (relative L2 over the material/emitter parameters): %.2f%%\n",
                      100.0 * result.final_parameter_error);
+    for (const ShapeResult& r : result.shapes)
+        std::fprintf(stderr, "shape '%s': mean vertex error %.4g -> %.4g, Chamfer distance %.4g -> %.4g\n",
+                     r.name.c_str(), r.initial_vertex_error, r.final_vertex_error, r.initial_chamfer,
+                     r.final_chamfer);
     if (std::isfinite(result.final_translation_error))
         std::fprintf(stderr, "translation error: %.4g scene units\n", result.final_translation_error);
     if (std::isfinite(result.final_rotation_error))

@@ -32,13 +32,16 @@ void Adam::step(std::vector<double>& x, const std::vector<double>& gradient, dou
     const double c1 = 1.0 - std::pow(b1, t_), c2 = 1.0 - std::pow(b2, t_); // bias corrections
     for (const AdamGroup& g : groups_) {
         const double lr = g.learning_rate * learning_rate_scale;
+        double v_max = 0;
         for (int k = g.offset; k < g.offset + g.size; ++k) {
             const double gk = gradient[size_t(k)];
-            double& m = m_[size_t(k)];
-            double& v = v_[size_t(k)];
-            m = b1 * m + (1.0 - b1) * gk;
-            v = b2 * v + (1.0 - b2) * gk * gk;
-            x[size_t(k)] -= lr * (m / c1) / (std::sqrt(v / c2) + settings_.epsilon);
+            m_[size_t(k)] = b1 * m_[size_t(k)] + (1.0 - b1) * gk;
+            v_[size_t(k)] = b2 * v_[size_t(k)] + (1.0 - b2) * gk * gk;
+            v_max = std::max(v_max, v_[size_t(k)]);
+        }
+        for (int k = g.offset; k < g.offset + g.size; ++k) {
+            const double v = g.uniform ? v_max : v_[size_t(k)];
+            x[size_t(k)] -= lr * (m_[size_t(k)] / c1) / (std::sqrt(v / c2) + settings_.epsilon);
             x[size_t(k)] = std::clamp(x[size_t(k)], g.lower, g.upper);
         }
     }

@@ -13,6 +13,9 @@ struct AdamGroup {
     double learning_rate = 0.01;
     double lower = -std::numeric_limits<double>::infinity();
     double upper = std::numeric_limits<double>::infinity();
+    // One second moment for the whole group, the largest of its scalars' (the "uniform Adam" of Nicolet et
+    // al. 2021, §5): the step keeps the gradient's direction within the group instead of a per-scalar sign.
+    bool uniform = false;
 };
 
 struct AdamSettings {
@@ -27,7 +30,8 @@ class Adam {
 
     // One step with gradient g (t = number of steps so far + 1):
     //   m ← β1 m + (1 − β1) g,   v ← β2 v + (1 − β2) g²,
-    //   x ← clamp(x − lr · m̂ / (√v̂ + ε), lower, upper),   m̂ = m / (1 − β1^t),  v̂ = v / (1 − β2^t).
+    //   x ← clamp(x − lr · m̂ / (√v̂ + ε), lower, upper),   m̂ = m / (1 − β1^t),  v̂ = v / (1 − β2^t)
+    // (a uniform group: v̂ the largest over the group).
     // `learning_rate_scale` multiplies every group's rate (for schedules).
     void step(std::vector<double>& x, const std::vector<double>& gradient, double learning_rate_scale = 1.0);
     // Clamps x into the bounds (for initial values).

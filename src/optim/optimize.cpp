@@ -4,6 +4,7 @@
 #include "diff/budget.h"
 #include "core/plot.h"
 #include "optim/adam.h"
+#include "optim/shape_metrics.h"
 #include "render/render.h"
 
 #include <nlohmann/json.hpp>
@@ -14,6 +15,9 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
+#include <span>
+
+#include <sys/resource.h>
 
 namespace penumbra {
 
@@ -102,12 +106,23 @@ class ConfigObject {
     std::set<std::string> known_;
 };
 
+std::string resolve(const std::string& base_dir, const std::string& path) {
+    return fs::path(path).is_absolute() ? path : (fs::path(base_dir) / path).lexically_normal().string();
+}
+
+// A number, an array of numbers, or a mesh file whose vertex positions are the values.
+std::vector<float> values_or_mesh(ConfigObject& o, const std::string& key, const std::string& base_dir) {
+    const json* v = o.find(key, true);
+    if (v->is_string()) return load_vertex_positions(resolve(base_dir, v->get<std::string>()));
+    return o.values(key);
+}
+
 OptimizedParameter parse_parameter(const std::string& name, const json& j, const std::string& where,
-                                   const std::string& source) {
+                                   const std::string& source, const std::string& base_dir) {
     ConfigObject o(j, where, source);
     OptimizedParameter p;
     p.name = name;
-    if (o.has("init")) p.init = o.values("init");
+    if (o.has("init")) p.init = values_or_mesh(o, "init", base_dir);
     p.learning_rate = o.number("lr", 0.0, true);
     if (!(p.learning_rate > 0.0)) throw Error(source + ": key '" + o.path("lr") + "' must be positive");
     if (const json* b = o.find("bounds", false)) {
@@ -127,12 +142,23 @@ OptimizedParameter parse_parameter(const std::string& name, const json& j, const
             p.free.push_back(e.get<bool>());
         }
     }
+    if (const json* pz = o.find("parameterization", false)) {
+        ConfigObject q(*pz, o.path("parameterization"), source);
+        const std::string type = q.string("type", "", true);
+        if (type != "large_steps")
+            throw Error(source + ": key '" + q.path("type") + "': unknown parameterization '" + type +
+                        "' (expected: large_steps)");
+        p.large_steps_lambda = q.number("lambda", 19.0);
+        if (const json* u = q.find("uniform_adam", false)) {
+            if (!u->is_boolean()) q.fail("uniform_adam", "a boolean", *u);
+            p.uniform_adam = u->get<bool>();
+        }
+        if (!(p.large_steps_lambda > 0.0))
+            throw Error(source + ": key '" + q.path("lambda") + "' must be positive");
+        q.finish();
+    }
     o.finish();
     return p;
-}
-
-std::string resolve(const std::string& base_dir, const std::string& path) {
-    return fs::path(path).is_absolute() ? path : (fs::path(base_dir) / path).lexically_normal().string();
 }
 
 } // namespace
@@ -155,21 +181,35 @@ OptimizeConfig parse_optimize_config(const json& j, const std::string& base_dir,
     const json* params = root.find("parameters", true);
     if (!params->is_object() || params->empty()) root.fail("parameters", "a non-empty object", *params);
     for (auto it = params->begin(); it != params->end(); ++it)
-        c.parameters.push_back(parse_parameter(it.key(), *it, "parameters." + it.key(), source));
+        c.parameters.push_back(parse_parameter(it.key(), *it, "parameters." + it.key(), source, base_dir));
 
-    ConfigObject target(*root.find("target", true), "target", source);
-    if (target.has("image") == target.has("values"))
-        throw Error(source + ": key 'target' needs exactly one of 'image' or 'values'");
-    if (target.has("image")) {
-        c.target_image = resolve(base_dir, target.string("image", ""));
+    if (const json* views = root.find("views", false)) c.views = parse_views(*views, base_dir, source);
+    c.views_per_iteration = int(root.integer("views_per_iteration", 0, 0));
+    const size_t view_images = size_t(std::count_if(
+        c.views.begin(), c.views.end(), [](const ViewSpec& v) { return !v.target_image.empty(); }));
+    if (view_images > 0 && view_images < c.views.size())
+        throw Error(source +
+                    ": key 'views': give every view its target 'image', or none (a rendered target)");
+    if (view_images > 0) {
+        if (root.has("target"))
+            throw Error(source + ": key 'target': the views give their target images; remove 'target'");
     } else {
-        ConfigObject values(*target.find("values", true), "target.values", source);
-        for (const OptimizedParameter& p : c.parameters)
-            if (values.has(p.name)) c.target_values[p.name] = values.values(p.name);
-        values.finish(); // a target value for a parameter that is not optimized is an error
-        c.target_spp = int(target.integer("spp", c.target_spp, 1));
+        ConfigObject target(*root.find("target", true), "target", source);
+        if (target.has("image") == target.has("values"))
+            throw Error(source + ": key 'target' needs exactly one of 'image' or 'values'");
+        if (target.has("image")) {
+            if (!c.views.empty())
+                throw Error(source + ": key 'target.image': with 'views', give each view its target 'image'");
+            c.target_image = resolve(base_dir, target.string("image", ""));
+        } else {
+            ConfigObject values(*target.find("values", true), "target.values", source);
+            for (const OptimizedParameter& p : c.parameters)
+                if (values.has(p.name)) c.target_values[p.name] = values_or_mesh(values, p.name, base_dir);
+            values.finish(); // a target value for a parameter that is not optimized is an error
+            c.target_spp = int(target.integer("spp", c.target_spp, 1));
+        }
+        target.finish();
     }
-    target.finish();
 
     c.method = root.string("method", "auto");
     if (c.method != "auto") {
@@ -270,7 +310,7 @@ Image render_image(const Scene& scene, int spp, uint64_t seed, int threads) {
 
 std::string snapshot_name(int iteration) {
     char buf[32];
-    std::snprintf(buf, sizeof(buf), "iter_%04d.png", iteration);
+    std::snprintf(buf, sizeof(buf), "iter_%04d", iteration);
     return buf;
 }
 
@@ -282,14 +322,14 @@ class CsvLog {
         if (!out_) throw Error("cannot write '" + path.string() + "'");
         out_ << "iteration,loss,parameter_error,translation_error,rotation_error,seconds";
         for (const InverseProblem::Entry& e : problem.entries())
-            for (int k = 0; k < e.size; ++k) {
+            for (int k = 0; k < e.size && listed(e); ++k) {
                 // A deformation handle's name holds its center (blob.deform@0.3,0.9,0): quoted (RFC 4180).
                 const std::string column = e.name + (e.size > 1 ? "[" + std::to_string(k) + "]" : "");
                 out_ << "," << (column.find(',') == std::string::npos ? column : "\"" + column + "\"");
             }
         out_ << "\n";
     }
-    void write(const IterationRecord& r, const std::vector<double>& x) {
+    void write(const IterationRecord& r, const std::vector<double>& x, const InverseProblem& problem) {
         char buf[128];
         std::snprintf(buf, sizeof(buf), "%d,%.9g", r.iteration, r.loss);
         out_ << buf;
@@ -299,12 +339,15 @@ class CsvLog {
         }
         std::snprintf(buf, sizeof(buf), ",%.3f", r.seconds);
         out_ << buf;
-        for (double v : x) {
-            std::snprintf(buf, sizeof(buf), ",%.7g", v);
-            out_ << buf;
-        }
+        for (const InverseProblem::Entry& e : problem.entries())
+            for (int k = e.offset; k < e.offset + e.size && listed(e); ++k) {
+                std::snprintf(buf, sizeof(buf), ",%.7g", x[size_t(k)]);
+                out_ << buf;
+            }
         out_ << "\n" << std::flush;
     }
+    // A mesh's vertex positions are not listed (its final values are in final_<shape>.ply).
+    static bool listed(const InverseProblem::Entry& e) { return e.size <= 64; }
 
   private:
     std::ofstream out_;
@@ -320,10 +363,16 @@ void write_result_json(const fs::path& path, const OptimizeResult& result) {
     j["final_translation_error"] = finite_or_null(result.final_translation_error);
     j["final_rotation_error_degrees"] = finite_or_null(result.final_rotation_error);
     j["seconds"] = result.seconds;
+    if (!result.history.empty()) j["seconds_per_iteration"] = result.seconds / double(result.history.size());
+    j["peak_memory_mb"] = result.peak_memory_mb;
+    for (const ShapeResult& r : result.shapes)
+        j["shapes"][r.name] = {{"mean_vertex_error", {r.initial_vertex_error, r.final_vertex_error}},
+                               {"chamfer_distance", {r.initial_chamfer, r.final_chamfer}}};
     for (const ParameterResult& p : result.parameters) {
-        json e{{"initial", p.initial}, {"final", p.final}};
+        const bool listed = p.final.size() <= 64; // as in log.csv
+        json e = listed ? json{{"initial", p.initial}, {"final", p.final}} : json{{"size", p.final.size()}};
         if (!p.truth.empty()) {
-            e["truth"] = p.truth;
+            if (listed) e["truth"] = p.truth;
             if (std::isfinite(p.relative_error)) e["relative_error"] = p.relative_error;
             if (std::isfinite(p.pose_error)) e["error"] = p.pose_error;
         }
@@ -358,12 +407,37 @@ void write_curves(const fs::path& out, const OptimizeConfig& config, const Optim
                    {"Inverse rendering: parameter error", "iteration", "error", true, 720, 440});
 }
 
+// Seed of a sample stream of view v: the single-view streams for v = 0, independent ones for the others.
+uint64_t view_stream(uint64_t seed, uint64_t stream, size_t view) {
+    return view == 0 ? stream_seed(seed, stream) : stream_seed(stream_seed(seed, stream), view);
+}
+
+// `base.png` for the scene's sensor alone, `base_<view>.png` with several views.
+std::string view_file(const std::string& base, const std::string& ext, const OptimizeConfig& config,
+                      const ViewSelector& views, size_t v) {
+    return config.views.empty() ? base + ext : base + "_" + views.view(v).name + ext;
+}
+
+double peak_memory_mb() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return double(usage.ru_maxrss) / 1024.0; // kilobytes on Linux
+}
+
+// The shape's name: the parameter's without ".vertex_positions".
+std::string shape_of(const std::string& parameter) {
+    const size_t dot = parameter.rfind('.');
+    return dot == std::string::npos ? parameter : parameter.substr(0, dot);
+}
+
 } // namespace
 
 OptimizeResult optimize(const OptimizeConfig& config,
                         const std::function<void(const IterationRecord&)>& on_iteration) {
     auto scene = load_scene(config.scene, config.defines);
     InverseProblem problem(*scene, config.parameters);
+    // The scene's own sensor alone, or the configured views (optim/views.h).
+    ViewSelector views(*scene, config.views.empty() ? std::vector<ViewSpec>{ViewSpec{}} : config.views);
     OptimizeResult result;
     if (config.method == "interior" && problem.geometric())
         throw Error(
@@ -395,22 +469,49 @@ OptimizeResult optimize(const OptimizeConfig& config,
 
     fs::create_directories(config.output);
     const fs::path out(config.output);
-    const bool known_truth = config.target_image.empty();
+    const bool known_truth = config.target_image.empty() && views.view(0).target_image.empty();
 
-    // Target: an image, or the scene at the true values rendered with many samples (stream 0).
-    Image target;
+    // Targets, one per view: an image, or the scene at the true values rendered with many samples (stream 0).
+    std::vector<Image> targets;
     const auto target_start = std::chrono::steady_clock::now();
-    if (known_truth) {
-        problem.set_values(truth);
-        target = render_image(*scene, config.target_spp, stream_seed(config.seed, 0), config.threads);
-        write_image((out / "target.exr").string(), target);
-        write_image((out / "target.png").string(), target);
-    } else {
-        target = read_image(config.target_image);
+    if (known_truth) problem.set_values(truth);
+    for (size_t v = 0; v < views.size(); ++v) {
+        views.select(v);
+        if (known_truth) {
+            targets.push_back(
+                render_image(*scene, config.target_spp, view_stream(config.seed, 0, v), config.threads));
+            write_image((out / view_file("target", ".exr", config, views, v)).string(), targets.back());
+            write_image((out / view_file("target", ".png", config, views, v)).string(), targets.back());
+            continue;
+        }
+        const std::string& path = config.views.empty() ? config.target_image : views.view(v).target_image;
+        targets.push_back(read_image(path));
+        if (targets.back().width != views.width(v) || targets.back().height != views.height(v))
+            throw Error("view '" + views.view(v).name + "': the target image '" + path + "' is " +
+                        std::to_string(targets.back().width) + "x" + std::to_string(targets.back().height) +
+                        ", the view's film " + std::to_string(views.width(v)) + "x" +
+                        std::to_string(views.height(v)));
     }
     result.target_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - target_start).count();
     problem.set_values(x);
+
+    // Shapes (vertex_positions) against their known target, at the start (Chamfer: optim/shape_metrics.h).
+    auto shape_errors = [&](bool initial) {
+        for (size_t i = 0; i < problem.entries().size() && known_truth; ++i) {
+            const InverseProblem::Entry& e = problem.entries()[i];
+            if (!e.shape) continue;
+            if (initial) result.shapes.push_back({shape_of(e.name), 0, 0, 0, 0});
+            ShapeResult& r = *std::find_if(result.shapes.begin(), result.shapes.end(),
+                                           [&](const ShapeResult& s) { return s.name == shape_of(e.name); });
+            const std::vector<double> now = problem.values();
+            const std::span<const double> a(now.data() + e.offset, size_t(e.size)),
+                b(truth.data() + e.offset, size_t(e.size));
+            (initial ? r.initial_vertex_error : r.final_vertex_error) = mean_vertex_error(a, b);
+            (initial ? r.initial_chamfer : r.final_chamfer) = chamfer_distance(a, b);
+        }
+    };
+    shape_errors(true);
 
     MethodRun run;
     run.spp = config.gradient_spp;
@@ -431,19 +532,33 @@ OptimizeResult optimize(const OptimizeConfig& config,
     };
 
     for (int it = 0; it < config.iterations; ++it) {
-        // The primal (stream 2i+1) gives the loss and the adjoint ∂L/∂I; the gradient uses independent
-        // samples (stream 2i+2): for a nonlinear loss, E[∂L/∂I(Î)] · E[dÎ/dθ] is unbiased only if the two are
-        // independent.
-        const Image primal =
-            render_image(*scene, config.spp, stream_seed(config.seed, 2 * uint64_t(it) + 1), config.threads);
-        const LossResult loss = compute_loss(config.loss, primal, target);
-        IterationRecord record = record_at(it, loss.value);
-        if (config.snapshot_every > 0 && it % config.snapshot_every == 0)
-            write_image((out / snapshot_name(it)).string(), primal);
-
-        run.seed = stream_seed(config.seed, 2 * uint64_t(it) + 2);
-        const std::vector<double> gradient =
-            problem.gradient(loss.adjoint, *method, run, it == 0 ? &result.description : nullptr);
+        // Per view: the primal (stream 2i+1) gives the loss and the adjoint ∂L/∂I; the gradient uses
+        // independent samples (stream 2i+2): for a nonlinear loss, E[∂L/∂I(Î)] · E[dÎ/dθ] is unbiased only if
+        // the two are independent. Loss and gradient are the means over the iteration's views.
+        const std::vector<size_t> subset =
+            views_of_iteration(views.size(), config.views_per_iteration, config.seed, it);
+        double loss_sum = 0;
+        std::vector<double> gradient(size_t(problem.dimension()), 0.0);
+        for (size_t v : subset) {
+            views.select(v);
+            const Image primal = render_image(
+                *scene, config.spp, view_stream(config.seed, 2 * uint64_t(it) + 1, v), config.threads);
+            const LossResult loss = compute_loss(config.loss, primal, targets[v]);
+            loss_sum += loss.value;
+            if (config.snapshot_every > 0 && it % config.snapshot_every == 0)
+                write_image((out / view_file(snapshot_name(it), ".png", config, views, v)).string(), primal);
+            run.seed = view_stream(config.seed, 2 * uint64_t(it) + 2, v);
+            const std::vector<double> g = problem.gradient(
+                loss.adjoint, *method, run, it == 0 && v == subset[0] ? &result.description : nullptr);
+            for (size_t k = 0; k < g.size(); ++k)
+                gradient[k] += g[k] / double(subset.size());
+            if (const auto bad = std::find_if(g.begin(), g.end(), [](double d) { return !std::isfinite(d); });
+                bad != g.end())
+                throw Error("iteration " + std::to_string(it) + ", view '" + views.view(v).name +
+                            "': method '" + result.method + "' returned a non-finite gradient (scalar " +
+                            std::to_string(bad - g.begin()) + ")");
+        }
+        IterationRecord record = record_at(it, loss_sum / double(subset.size()));
         // Exponential schedule: the rates fall to lr_decay × lr at the last iteration.
         const double lr_scale =
             config.iterations > 1 ? std::pow(config.lr_decay, double(it) / (config.iterations - 1)) : 1.0;
@@ -451,15 +566,19 @@ OptimizeResult optimize(const OptimizeConfig& config,
         problem.adam_step(adam, gradient, lr_scale);
 
         record.seconds = elapsed();
-        log.write(record, x_before);
+        log.write(record, x_before, problem);
         result.history.push_back(record);
         if (on_iteration) on_iteration(record);
     }
     result.seconds = elapsed();
 
-    write_image((out / "final.png").string(),
-                render_image(*scene, config.spp,
-                             stream_seed(config.seed, 2 * uint64_t(config.iterations) + 1), config.threads));
+    for (size_t v = 0; v < views.size(); ++v) {
+        views.select(v);
+        write_image((out / view_file("final", ".png", config, views, v)).string(),
+                    render_image(*scene, config.spp,
+                                 view_stream(config.seed, 2 * uint64_t(config.iterations) + 1, v),
+                                 config.threads));
+    }
     const std::vector<double> x_final = problem.values();
     for (size_t i = 0; i < problem.entries().size(); ++i) {
         const InverseProblem::Entry& e = problem.entries()[i];
@@ -472,6 +591,9 @@ OptimizeResult optimize(const OptimizeConfig& config,
             else
                 pr.pose_error = problem.entry_error(i, truth);
         }
+        if (e.shape)
+            write_ply_mesh((out / ("final_" + shape_of(e.name) + ".ply")).string(), pr.final,
+                           e.shape->mesh.indices);
         result.parameters.push_back(std::move(pr));
     }
     if (known_truth) {
@@ -479,6 +601,8 @@ OptimizeResult optimize(const OptimizeConfig& config,
         result.final_translation_error = problem.translation_error(truth);
         result.final_rotation_error = problem.rotation_error(truth);
     }
+    shape_errors(false);
+    result.peak_memory_mb = peak_memory_mb();
     write_result_json(out / "result.json", result);
 
     write_curves(out, config, result);

@@ -4,18 +4,32 @@
 //
 //   scene           string     scene file, relative to the configuration file
 //   defines         object     <default> overrides, name → string or number
-//   parameters      object     name → {"init": number | [values], "lr": number, "bounds": [lo | null, hi |
-//   null]}
-//                              ("init" defaults to the scene's value, "bounds" to none). A pose is
-//                              "<shape>.translate" (3 values, world units) and/or "<shape>.rotate" (a
-//                              rotation vector in degrees about the shape's bounding-box center, no bounds),
-//                              both relative to the scene's pose (optim/problem.h); "<shape>.deform@cx,cy,cz"
-//                              a deformation handle at c (3 values, its displacement, world units; several
-//                              per shape, not with a pose; optim/deformation.h)
+//   parameters      object     name → {"init": number | [values], "lr": number,
+//                              "bounds": [lo | null, hi | null]} ("init" defaults to the scene's value,
+//                              "bounds" to none). A pose is "<shape>.translate" (3 values, world units)
+//                              and/or "<shape>.rotate" (a rotation vector in degrees about the shape's
+//                              bounding-box center, no bounds), both relative to the scene's pose
+//                              (optim/problem.h); "<shape>.deform@cx,cy,cz" a deformation handle at c (3
+//                              values, its displacement, world units; several per shape, not with a pose;
+//                              optim/deformation.h).
+//                              "parameterization": {"type": "large_steps", "lambda": λ (default 19),
+//                              "uniform_adam": bool (default true)}: a <shape>.vertex_positions stepped in
+//                              u = (I + λL) x (optim/large_steps.h; no bounds, no free mask), by Adam with
+//                              one second moment for the whole mesh (optim/adam.h) unless uniform_adam is
+//                              false. "init" (and a target value) of a vertex_positions may be a mesh file
+//                              (.ply/.obj, relative to the configuration, same vertex count and order): its
+//                              positions as stored
 //   target          object     {"image": path relative to the configuration}  or
-//                              {"values": {name → number | [values]}, "spp": int}: the same scene with these
-//                              values of optimized parameters (the others keep the scene's), rendered at
-//                              start
+//                              {"values": {name → number | [values] | mesh}, "spp": int}: the same scene with
+//                              these values of optimized parameters (the others keep the scene's), rendered
+//                              at start (for every view); absent when every view has its "image"
+//   views           array      several views (optim/views.h; default: the scene's sensor alone), each
+//                              {"sensor": id | index, "look_at": {"origin": [x,y,z], "target": [x,y,z],
+//                              "up": [x,y,z]}, "image": target path, "name": string}: a sensor of the scene,
+//                              or a camera pose (of the given sensor, default the scene's first: its
+//                              intrinsics and film), or both; "image" in every view or in none
+//   views_per_iteration int    views rendered and differentiated per iteration, drawn at random without
+//                              replacement (0 = all; default 0); loss and gradient are the mean over them
 //   method          string     "auto" (default: psdr when a pose is optimized, else interior) or any
 //                              derivative method (diff/method.h: psdr, interior, paths, ...); "interior" with
 //                              a pose is an error (it has no silhouette or shadow term)
@@ -31,16 +45,19 @@
 //   iterations      int        number of Adam steps
 //   spp             int        samples per pixel of the primal image of each iteration
 //   gradient_spp    int        samples per pixel of the gradient (see primary_spp), independent of the
-//   primal's seed            int        base seed (default 0) output          string     output directory
-//   (default "optimize_out"), relative to the working directory snapshot_every  int        write
-//   iter_NNNN.png every N iterations (0 = never; default 10) lr_decay        number     learning-rate factor
-//   reached at the last iteration, decayed exponentially
+//                              primal's
+//   seed            int        base seed (default 0)
+//   output          string     output directory (default "optimize_out"), relative to the working directory
+//   snapshot_every  int        write iter_NNNN.png (several views: iter_NNNN_<view>.png) every N iterations
+//                              (0 = never; default 10)
+//   lr_decay        number     learning-rate factor reached at the last iteration, decayed exponentially
 //                              (default 1: constant rates)
 //   threads         int        worker threads (0 = all; default 0)
 #pragma once
 #include "diff/method.h"
 #include "optim/loss.h"
 #include "optim/problem.h"
+#include "optim/views.h"
 
 #include <nlohmann/json_fwd.hpp>
 
@@ -57,7 +74,7 @@ struct OptimizeConfig {
     std::string scene; // resolved path
     std::map<std::string, std::string> defines;
     std::vector<OptimizedParameter> parameters;
-    std::string target_image; // resolved path, or empty for a rendered target
+    std::string target_image; // resolved path, or empty for a rendered target (or the views' images)
     std::map<std::string, std::vector<float>> target_values;
     int target_spp = 1024;
     std::string method = "auto";  // "auto" or a registered derivative method (diff/method.h)
@@ -70,6 +87,8 @@ struct OptimizeConfig {
     int snapshot_every = 10;
     double lr_decay = 1.0;
     int threads = 0;
+    std::vector<ViewSpec> views; // empty: the scene's sensor
+    int views_per_iteration = 0; // 0: all
 };
 
 // Parses a configuration; relative paths resolve against `base_dir`. Unknown keys and wrong types throw Error
@@ -97,6 +116,13 @@ struct ParameterResult {
     double pose_error = std::numeric_limits<double>::quiet_NaN();
 };
 
+// A <shape>.vertex_positions against its known target (optim/shape_metrics.h), at the start and the end.
+struct ShapeResult {
+    std::string name;
+    double initial_vertex_error = 0, final_vertex_error = 0; // mean ‖x_i − x*_i‖ (scene units)
+    double initial_chamfer = 0, final_chamfer = 0;           // symmetric Chamfer distance of the vertex sets
+};
+
 struct OptimizeResult {
     std::vector<IterationRecord> history;
     std::vector<ParameterResult> parameters;
@@ -106,9 +132,13 @@ struct OptimizeResult {
     std::string method;      // the method used
     std::string description; // the method's description of its first gradient (psdr: the calibrated budget)
     double target_seconds = 0, seconds = 0;
+    std::vector<ShapeResult> shapes; // vertex_positions parameters with a known target
+    double peak_memory_mb = 0;       // the process's peak resident set (getrusage), at the end
 };
 
-// Runs the optimization; writes log.csv, snapshots, final.png, loss.png and result.json into config.output.
+// Runs the optimization; writes log.csv, snapshots, final.png (several views: final_<view>.png), loss.png,
+// result.json and, for each vertex_positions, final_<shape>.ply into config.output. log.csv and result.json
+// list the values of parameters with at most 64 scalars (a mesh's are in its .ply).
 // `on_iteration` is called after each iteration's loss is known.
 OptimizeResult optimize(const OptimizeConfig& config,
                         const std::function<void(const IterationRecord&)>& on_iteration = {});

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <span>
 
 namespace penumbra {
 
@@ -48,8 +49,26 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
             data_dimension += p.size;
             data_values_.insert(data_values_.end(), p.data, p.data + p.size);
             data_selection_.emplace_back(op.name, std::vector<float>{});
-            if (p.geometry && p.shape) deformed.insert(p.shape);
+            if (p.geometry && p.shape) {
+                deformed.insert(p.shape);
+                e.shape = p.shape;
+            }
+            if (op.large_steps_lambda > 0) {
+                if (!e.shape || size_t(p.size) != 3 * e.shape->mesh.vertex_count())
+                    throw Error(
+                        "parameter '" + op.name +
+                        "': the large-steps parameterization applies to a shape's vertex_positions only");
+                if (std::isfinite(op.lower) || std::isfinite(op.upper) || !op.free.empty())
+                    throw Error("parameter '" + op.name +
+                                "': the large-steps parameterization takes no bounds and no 'free' mask");
+                e.uniform_adam = op.uniform_adam;
+                e.large_steps = std::make_shared<const LargeSteps>(
+                    e.shape->mesh.indices, int(e.shape->mesh.vertex_count()), op.large_steps_lambda);
+            }
         } else {
+            if (op.large_steps_lambda > 0)
+                throw Error("parameter '" + op.name +
+                            "': the large-steps parameterization applies to a shape's vertex_positions only");
             if (p.sensor || p.emitter)
                 throw Error("parameter '" + op.name +
                             "': camera motions and light motions cannot be optimized, only shape poses");
@@ -128,7 +147,8 @@ InverseProblem::~InverseProblem() = default;
 std::vector<AdamGroup> InverseProblem::adam_groups() const {
     std::vector<AdamGroup> groups;
     for (const Entry& e : entries_)
-        groups.push_back({e.name, e.offset, e.size, e.learning_rate, e.lower, e.upper});
+        groups.push_back(
+            {e.name, e.offset, e.size, e.learning_rate, e.lower, e.upper, e.large_steps && e.uniform_adam});
     return groups;
 }
 
@@ -197,7 +217,23 @@ void InverseProblem::adam_step(Adam& adam, const std::vector<double>& gradient, 
     for (const Entry& e : entries_)
         for (int k = 0; k < e.size; ++k)
             if (!e.free[size_t(k)]) g[size_t(e.offset + k)] = 0.0;
+    // Large steps: Adam sees u = (I + λL) x and dL/du = (I + λL)⁻¹ dL/dx; x = (I + λL)⁻¹ u after the step.
+    const auto span_of = [](std::vector<double>& v, const Entry& e) {
+        return std::span<double>(v.data() + e.offset, size_t(e.size));
+    };
+    for (const Entry& e : entries_)
+        if (e.large_steps) {
+            const std::vector<double> u = e.large_steps->to_latent(span_of(x, e));
+            const std::vector<double> g_u = e.large_steps->latent_gradient(span_of(g, e));
+            std::copy(u.begin(), u.end(), span_of(x, e).begin());
+            std::copy(g_u.begin(), g_u.end(), span_of(g, e).begin());
+        }
     adam.step(x, g, learning_rate_scale);
+    for (const Entry& e : entries_)
+        if (e.large_steps) {
+            const std::vector<double> x_e = e.large_steps->from_latent(span_of(x, e));
+            std::copy(x_e.begin(), x_e.end(), span_of(x, e).begin());
+        }
     std::vector<double> delta(x.size());
     for (const Entry& e : entries_)
         for (int k = e.offset; k < e.offset + e.size; ++k)

@@ -14,6 +14,7 @@
 #include "diff/method.h"
 #include "optim/adam.h"
 #include "optim/deformation.h"
+#include "optim/large_steps.h"
 #include "optim/pose.h"
 
 #include <limits>
@@ -30,6 +31,9 @@ struct OptimizedParameter {
     double lower = -std::numeric_limits<double>::infinity(); // not allowed for rotations
     double upper = std::numeric_limits<double>::infinity();
     std::vector<bool> free = {}; // which components are optimized (empty: all); the others keep their init
+    // > 0: a <shape>.vertex_positions stepped in u = (I + λL) x, λ this value (optim/large_steps.h)
+    double large_steps_lambda = 0;
+    bool uniform_adam = true; // large steps: Adam with one second moment for the parameter (optim/adam.h)
 };
 
 // ‖a − b‖ / ‖b‖ (‖a − b‖ when b = 0).
@@ -47,11 +51,15 @@ class InverseProblem {
         double learning_rate = 0.01, lower = 0, upper = 0;
         int deformation = -1, handle = -1; // Deform: index into the deformations and the handle in it
         std::vector<bool> free = {};       // size components: whether each is optimized
+        const Shape* shape = nullptr;      // <shape>.vertex_positions: the shape
+        std::shared_ptr<const LargeSteps> large_steps = nullptr; // its large-steps parameterization, or null
+        bool uniform_adam = false;                               // large steps: uniform Adam (optim/adam.h)
     };
 
     // Resolves the names against the scene. Throws Error for unknown names, camera motions, scaling, a
     // parameter given twice, vertex_positions together with a pose of the same shape, bounds on a rotation,
-    // and a `free` mask whose length is not the parameter's number of components.
+    // a `free` mask whose length is not the parameter's number of components, and a large-steps
+    // parameterization of anything but a vertex_positions without bounds and mask.
     InverseProblem(Scene& scene, const std::vector<OptimizedParameter>& parameters);
     ~InverseProblem();
 
@@ -70,7 +78,8 @@ class InverseProblem {
     // x ⊕ δ: Data and translations add δ, rotations compose on the left with exp([δ]×) (δ in degrees).
     void retract(const std::vector<double>& delta);
     // One Adam step with a gradient in the tangent layout (rotations: increments from 0, then retracted);
-    // components that are not free get a zero gradient, hence no step.
+    // components that are not free get a zero gradient, hence no step. Large-steps entries step in
+    // u = (I + λL) x with the gradient (I + λL)⁻¹ dL/dx (optim/large_steps.h).
     void adam_step(Adam& adam, const std::vector<double>& gradient, double learning_rate_scale);
 
     // dL/dx in the tangent layout for the adjoint ∂L/∂I at the current values, by a derivative method
