@@ -182,12 +182,12 @@ Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, WarRng& rng, in
     return warped_path(c, sampler, rng, ray, first, x1, rays) * factor;
 }
 
-// ṡ · across at a point s of a pixel edge or of the film's edge: the film velocity d/dθ s(X(p + (θ − θ0) v(p),
-// θ)) of the reparameterized first vertex p seen through s (material motion, moving camera and warp), for
-// the flux −∮ P_j L (ṡ · n_out) over the edges where the filters jump (diff/pixel_boundary.h): the divergence
-// theorem of Eq. 34 at p_1 with a field that does not vanish where s(p_1) crosses them. Zero for the
-// environment seen directly (its film position does not move: camera_sample). The auxiliary stream is the
-// edge sample's own.
+// ṡ · across at a point s of a pixel edge or of the film's edge: the film velocity
+// d/dθ s(X(p + (θ − θ0) v(p), θ)) of the reparameterized first vertex p seen through s (material motion,
+// moving camera and warp), for the flux −∮ P_j L (ṡ · n_out) over the edges where the filters jump
+// (diff/pixel_boundary.h): the divergence theorem of Eq. 34 at p_1 with a field that does not vanish where
+// s(p_1) crosses them. Zero for the environment seen directly (its film position does not move:
+// camera_sample). The auxiliary stream is the edge sample's own.
 Var film_edge_velocity(const WarContext& c, uint64_t seed, const Vec2f& s, const Vec2f& across,
                        uint64_t stream, RayCounter& rays) {
     const Sensor& sensor = *c.scene.sensor;
@@ -309,8 +309,8 @@ DerivativeImage war_derivative(const Scene& scene, const Parameters& params, con
         const uint64_t seed = options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b);
         PixelSums s = forward_batch(c, options, seed, progress, cost);
         SampleCost edge_cost;
-        const Image edges =
-            film_edge_term(c, seed, options.spp).derivative(params, film_edge_options(c, options, seed, edge_cost));
+        const Image edges = film_edge_term(c, seed, options.spp)
+                                .derivative(params, film_edge_options(c, options, seed, edge_cost));
         cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
         for (size_t i = 0; i < edges.pixels.size(); ++i)
             s.derivative.pixels[i] += edges.pixels[i];

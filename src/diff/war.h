@@ -20,10 +20,10 @@
 // Not covered: delta lights (no integral to warp at the light: the motion of point, spot and directional
 // lights' shadows is missed, as in paper 004), vertices after a delta BSDF lobe (no area integral there),
 // and the environment seen directly through the film (its direction is not warped: the silhouettes of moving
-// objects against it are missed). Surfaces only. Where the pixel filters jump (a box filter's pixel edges, any
-// filter at the film's edge without sample_border) the first vertex's field does not vanish, and the flux
-// −∮ P_j L (ṡ · n_out) across those static film edges is added (diff/pixel_boundary.h), with ṡ the film
-// velocity of the reparameterized first vertex seen there.
+// objects against it are missed). Surfaces only. Where the pixel filters jump (a box filter's pixel edges,
+// any filter at the film's edge without sample_border) the first vertex's field does not vanish, and the
+// flux −∮ P_j L (ṡ · n_out) across those static film edges is added (diff/pixel_boundary.h), with ṡ the
+// film velocity of the reparameterized first vertex seen there.
 #pragma once
 #include "diff/interior.h"
 #include "diff/war_field.h"
