@@ -44,6 +44,7 @@ struct MethodCase {
 const std::vector<MethodCase> methods = {
     {"psdr", "psdr", {}},
     {"psdr_material", "psdr", {{"first-vertex", "material"}}},
+    {"war", "war", {}},
 };
 
 // The defines of a scene's stored reference (its key holds them): the light of glass_box and caustic reaches
@@ -93,7 +94,20 @@ class WarScene : public testing::TestWithParam<std::tuple<std::string, std::stri
 // expectation of 0.35-0.44). Behind smooth glass (dielectric) the material form carries no derivative through
 // the walls and the sign is wrong: relerr 1.01, mean -0.013 against 0.036. psdr_material on caustic:
 // heavy-tailed (seed 2: 4.2% of the 2 × 2 blocks beyond 4σ).
+//
+// war (N_q = 64), seeds 0 and 1 (PENUMBRA_TEST_SEED): star_light passes both (relerr4 0.062, 0.060 against
+// noise 0.060; z −0.6, +1.9; 1.5% of the blocks beyond 4σ; ~30 s). teapot: seed 0 fails on the tails (2.3%
+// of the 2 × 2 blocks beyond 4σ, the check allows 2%; mean −0.0453 against −0.0460, z +0.5), seed 1 passes
+// (1.4%, z +0.8). caustic: seed 0 passes (relerr4 0.24 against 0.26, z +1.3), seed 1 fails on the tails
+// (2.1% of the blocks; z −0.8); its noise (relerr expected ~0.6) makes the check weak. glass_box: 15.7% of
+// the blocks beyond 4σ, relerr4 0.37 against 0.27, mean 0.030 against 0.034 (z −0.5; 71 s): heavy-tailed
+// behind the rough glass walls.
 const char* open_problem(const std::string& label, const std::string& scene) {
+    if (label == "war" && (scene == "teapot" || scene == "caustic"))
+        return "war: heavy-tailed, 2.1-2.3% of the 2 x 2 blocks beyond 4 sigma (limit 2%) on one of seeds 0-1";
+    if (label == "war" && scene == "glass_box")
+        return "war: heavy-tailed behind the rough glass (15.7% of blocks beyond 4 sigma, relerr4 0.37 vs "
+               "0.27)";
     if (label.rfind("psdr", 0) == 0 && scene == "star_light")
         return "psdr's image mean is heavy-tailed and low on the moving star light (z -6.0 to +1.9 over "
                "seeds)";

@@ -4,6 +4,7 @@
 #include "core/interrupt.h"
 #include "diff/film_sample.h"
 #include "diff/material_form.h"
+#include "diff/pixel_boundary.h"
 #include "render/emitter_hit.h"
 #include "render/light_medium.h"
 #include "render/mis.h"
@@ -169,8 +170,7 @@ Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, WarRng& rng, in
         return c.settings.hide_emitters ? Color3<Var>(Var(0.f))
                                         : c.form.environment(c.scene, ray.d) * Color3<Var>(ray_weight * w);
     }
-    const WarNeighbor camera{Interaction3f{Infinity, ray.o, Vec3f(0.f)}, c.form.camera_position(ray.o),
-                             film.sample_border ? nullptr : &sensor};
+    const WarNeighbor camera{Interaction3f{Infinity, ray.o, Vec3f(0.f)}, c.form.camera_position(ray.o)};
     WarVertex x1 = war_vertex(c.field, first, camera, rng, rays);
     const Vec3<Var> p_cam = c.form.to_reference_camera(x1.si.p, ray.o);
     const Vec3<Var> n_cam = c.form.direction_to_reference_camera(x1.si.n);
@@ -180,6 +180,53 @@ Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, WarRng& rng, in
     const Var factor = film.filter_weight(px, py, s) * relative_change(jacobian * x1.jacobian) / Var(fs.pdf);
     x1.si.wi = x1.si.to_local(c.form.direction_from_reference_camera(sensor.to_sensor(p_cam)));
     return warped_path(c, sampler, rng, ray, first, x1, rays) * factor;
+}
+
+// ṡ · across at a point s of a pixel edge or of the film's edge: the film velocity
+// d/dθ s(X(p + (θ − θ0) v(p), θ)) of the reparameterized first vertex p seen through s (material motion,
+// moving camera and warp), for the flux −∮ P_j L (ṡ · n_out) over the edges where the filters jump
+// (diff/pixel_boundary.h): the divergence theorem of Eq. 34 at p_1 with a field that does not vanish where
+// s(p_1) crosses them. Zero for the environment seen directly (its film position does not move:
+// camera_sample). The auxiliary stream is the edge sample's own.
+Var film_edge_velocity(const WarContext& c, uint64_t seed, const Vec2f& s, const Vec2f& across,
+                       uint64_t stream, RayCounter& rays) {
+    const Sensor& sensor = *c.scene.sensor;
+    const Ray ray = sensor.sample_ray(s, Vec2f(0.5f)).first;
+    ++rays.rays;
+    const SurfaceInteraction3f first = c.scene.intersect(ray);
+    if (!first.is_valid()) return Var(0.f);
+    WarRng rng(seed ^ 0x5851F42D4C957F2DULL, stream, 0);
+    const WarNeighbor camera{Interaction3f{Infinity, ray.o, Vec3f(0.f)}, c.form.camera_position(ray.o)};
+    const WarVertex x1 = war_vertex(c.field, first, camera, rng, rays.rays);
+    Vec2<Var> st;
+    Var jacobian;
+    if (!sensor.film_position(c.form.to_reference_camera(x1.si.p, ray.o),
+                              c.form.direction_to_reference_camera(x1.si.n), st, jacobian))
+        return Var(0.f);
+    return (st.x - Var(s.x)) * Var(across.x) + (st.y - Var(s.y)) * Var(across.y);
+}
+
+// The edge term with about `spp` samples per pixel whose filter jumps at its own edges (box: ~2 unit segments
+// per pixel), `spp` per unit of the film's edge otherwise.
+PixelBoundary film_edge_term(const WarContext& c, uint64_t seed, int spp) {
+    const bool box = c.scene.sensor->film->rfilter->plugin == "box";
+    return PixelBoundary(
+        c.scene,
+        [&c, seed](const Vec2f& s, const Vec2f& across, uint64_t stream, RayCounter& rays) {
+            return film_edge_velocity(c, seed, s, across, stream, rays);
+        },
+        box ? std::max(1, spp / 2) : spp);
+}
+
+BoundaryOptions film_edge_options(const WarContext& c, const WarOptions& options, uint64_t seed,
+                                  SampleCost& cost) {
+    BoundaryOptions bo;
+    bo.seed = seed;
+    bo.threads = options.threads;
+    bo.path = c.settings;
+    bo.first_vertex = FirstVertex::Material;
+    bo.cost = &cost;
+    return bo;
 }
 
 bool finite(const Color3<Var>& v) {
@@ -245,12 +292,6 @@ void require_war_support(const Scene& scene, const Parameters& params) {
         throw Error(
             "method war needs a sensor with one center of projection (perspective, orthographic, "
             "thinlens with aperture 0): its first vertex's field is conditioned on the camera's position");
-    const ReconstructionFilter& f = *scene.sensor->film->rfilter;
-    if (f.eval(0.999f * f.radius()) > 0.05f * f.eval(0.f))
-        throw Error(
-            "method war needs a reconstruction filter that falls continuously to zero (the jumps of '" +
-            f.to_string() + "' at pixel edges are discontinuities no field moves): use <rfilter " +
-            "type=\"gaussian\"/> (Mitsuba's default) or tent, or the psdr method");
 }
 
 DerivativeImage war_derivative(const Scene& scene, const Parameters& params, const WarOptions& options) {
@@ -265,8 +306,14 @@ DerivativeImage war_derivative(const Scene& scene, const Parameters& params, con
         auto progress = options.progress
                             ? std::function<void(float)>([&, b](float f) { options.progress((b + f) / B); })
                             : std::function<void(float)>();
-        const PixelSums s =
-            forward_batch(c, options, options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b), progress, cost);
+        const uint64_t seed = options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b);
+        PixelSums s = forward_batch(c, options, seed, progress, cost);
+        SampleCost edge_cost;
+        const Image edges = film_edge_term(c, seed, options.spp)
+                                .derivative(params, film_edge_options(c, options, seed, edge_cost));
+        cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
+        for (size_t i = 0; i < edges.pixels.size(); ++i)
+            s.derivative.pixels[i] += edges.pixels[i];
         primal.add(s.primal);
         derivative.add(s.derivative);
     }
@@ -329,6 +376,13 @@ Gradient war_gradient(const Scene& scene, const Parameters& params, const Image&
             cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays, tape_nodes});
         },
         options.progress);
+    std::vector<double> edges(dim, 0.0);
+    SampleCost edge_cost;
+    film_edge_term(c, options.seed, options.spp)
+        .gradient(params, adjoint, film_edge_options(c, options, options.seed, edge_cost), edges);
+    cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
+    for (size_t k = 0; k < dim; ++k)
+        result.values[k] += edges[k];
     result.cost = cost.get();
     for (const std::vector<double>& g : gradients)
         for (size_t k = 0; k < dim; ++k)

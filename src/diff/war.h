@@ -20,8 +20,10 @@
 // Not covered: delta lights (no integral to warp at the light: the motion of point, spot and directional
 // lights' shadows is missed, as in paper 004), vertices after a delta BSDF lobe (no area integral there),
 // and the environment seen directly through the film (its direction is not warped: the silhouettes of moving
-// objects against it are missed). Surfaces only; a continuous reconstruction filter is required (a box
-// filter's jumps at pixel edges are discontinuities of f̂ that no field moves).
+// objects against it are missed). Surfaces only. Where the pixel filters jump (a box filter's pixel edges,
+// any filter at the film's edge without sample_border) the first vertex's field does not vanish, and the
+// flux −∮ P_j L (ṡ · n_out) across those static film edges is added (diff/pixel_boundary.h), with ṡ the
+// film velocity of the reparameterized first vertex seen there.
 #pragma once
 #include "diff/interior.h"
 #include "diff/war_field.h"
@@ -39,7 +41,7 @@ struct WarOptions {
 };
 
 // Throws a clear Error for what the estimator cannot differentiate (media, sensors without one center of
-// projection, discontinuous pixel filters).
+// projection).
 void require_war_support(const Scene& scene, const Parameters& params);
 
 // Forward mode: dI/dθ along params.direction() (with per-pixel standard errors over the batches).

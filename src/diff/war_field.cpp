@@ -82,20 +82,6 @@ void for_each_projection(const Scene& scene, const Vec3f& q_prime, const Vec3f& 
     }
 }
 
-// The film's edge seen from the camera y: whether X(q) projects off the film (or lies behind the camera),
-// and then its v_dis (B stays 0).
-bool off_film(const WarScene& s, const WarNeighbor& y, const SurfaceInteraction3f& q, const Vec3f& direction,
-              WarAuxiliary& a) {
-    const Film& film = *y.camera->film;
-    Vec2f f;
-    float jacobian;
-    if (!y.camera->film_position(q.p, q.n, f, jacobian)) return true; // behind the camera: no motion known
-    if (f.x >= 0.f && f.y >= 0.f && f.x <= float(film.width) && f.y <= float(film.height)) return false;
-    const Vec3<Var> d = s.form.direction_from_reference_camera(Vec3<Var>(direction));
-    a.velocity = discontinuity_velocity(s.params, q, y.position, y.position + d);
-    return true;
-}
-
 } // namespace
 
 WarWeight war_weight(const Vec3f& q_minus_p, const Vec3f& p_minus_y, float boundary,
@@ -158,9 +144,8 @@ std::vector<WarAuxiliary> sample_war_auxiliary(const WarScene& s, const SurfaceI
             a.offset = q.p - p;
             a.pdf = pdf_prime * std::abs(dot(n, q.n)); // Eq. 46
             a.velocity = Vec3<Var>(Var(0.f));
-            a.boundary = 0.f; // invisible from y (occluded or off the film)
+            a.boundary = 0.f; // invisible from y
             const Ray ray = y.reference.spawn_ray_to(q.p);
-            if (y.camera && off_film(s, y, q, ray.d, a)) return out.push_back(a);
             // Visibility of X(q) from y: the first occluder x″ of the segment (§3.2.2 Step 1).
             ++rays;
             const SurfaceInteraction3f occluder = s.scene.intersect(ray);

@@ -115,13 +115,11 @@ struct WarScene {
 
 // The neighbour p_{K+1} the field is conditioned on: its reference point (to spawn rays; n = 0 at a camera)
 // and its material motion y(θ) = X(p_{K+1}, θ) (without its own warp: p_{K+1} is held fixed). At the camera
-// the film's edge bounds what it sees as occluders do (a pixel's filter is cut there unless the film samples
-// its border): points projecting off the film are invisible, with v_dis the motion that keeps their film
-// position (z on the moving camera's ray through it).
+// the film's edge is not a boundary of the field: where it cuts the filters, diff/war.h adds the flux across
+// it.
 struct WarNeighbor {
     Interaction3f reference;
     Vec3<Var> position;
-    const Sensor* camera = nullptr; // set when p_{K+1} is the camera and its film's edge cuts the filters
 };
 
 // Algorithm 1 lines 5–12 at the surface vertex `hit`: the auxiliary points with their boundary test and

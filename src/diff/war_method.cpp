@@ -75,7 +75,8 @@ MethodInfo war_method_info() {
     return {
         "war",
         "warped-area reparameterization of paper 000: path tracing with NEE in material form, each vertex "
-        "warped by a continuous velocity field (no boundary sampling; surfaces, continuous pixel filters)",
+        "warped by a continuous velocity field (no boundary sampling but the film and pixel edges where the "
+        "filters jump; surfaces)",
         {{"war-aux",
           Type::Int,
           "auxiliary points N_q per warped vertex (default 64: the consistent field is biased at 16, "
