@@ -115,7 +115,7 @@ INSTANTIATE_TEST_SUITE_P(Validation, WarBdptBoundaryScenes, testing::ValuesIn(ca
                          [](const testing::TestParamInfo<BdptCase>& info) { return info.param.label; });
 
 // Reverse mode runs the same samples through the same tape: ⟨adjoint, dI/dθ⟩ of forward mode (one batch, so
-// that the seeds agree) equals the gradient along the direction.
+// that the seeds agree) equals the gradient along the direction (the glossy shadow: light subpaths connect).
 TEST(WarBdptReverseMode, DotProductWithForwardMode) {
     Loaded l = load(cases[3]);
     auto method = make_method("war-bdpt", MethodOptions());
@@ -142,9 +142,9 @@ TEST(WarBdptReverseMode, DotProductWithForwardMode) {
     EXPECT_NEAR(reverse, forward, 1e-4 * std::abs(forward) + 1e-6);
 }
 
-// Same seed, same image, whatever the thread count.
+// Same seed, same image, whatever the thread count (the glossy shadow: light subpaths connect).
 TEST(WarBdptDeterminism, ThreadCountDoesNotChangeTheDerivative) {
-    Loaded l = load(cases[1]);
+    Loaded l = load(cases[3]);
     MethodRun run;
     run.spp = 8;
     run.batches = 2;
