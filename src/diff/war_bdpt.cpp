@@ -122,8 +122,9 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, WarRng& rng, int p
     const Film& film = *sensor.film;
     const FilmSample fs = sample_film(*film.rfilter, sampler, false);
     const Vec2f center(px + 0.5f, py + 0.5f);
-    const auto [ray, ray_weight] = sensor.sample_ray(center + fs.offset, sampler.next_2d());
-    const Shot shot{px, py, fs, ray};
+    // The ray's weight is 1 for the sensors war accepts (one center of projection): the camera factor
+    // carries W/p.
+    const Shot shot{px, py, fs, sensor.sample_ray(center + fs.offset, sampler.next_2d()).first};
     RayCounter counter;
     // No sensor connection: light tracing (t = 1) is neither sampled nor counted in the MIS weights.
     BDPTContext ctx{c.scene, c.bdpt, sampler, counter, false, false, c.bounds, &record};
