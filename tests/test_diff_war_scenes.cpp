@@ -45,6 +45,7 @@ const std::vector<MethodCase> methods = {
     {"psdr", "psdr", {}},
     {"psdr_material", "psdr", {{"first-vertex", "material"}}},
     {"war", "war", {}},
+    {"war_bdpt", "war-bdpt", {}},
 };
 
 // The defines of a scene's stored reference (its key holds them): the light of glass_box and caustic reaches
@@ -79,6 +80,22 @@ std::vector<std::string> scene_names() {
 }
 
 class WarScene : public testing::TestWithParam<std::tuple<std::string, std::string>> {};
+
+// war-bdpt (docs/war.md, "Bidirectional estimator") passes star_light (seeds 0-2: z +0.02, +0.36, -0.44;
+// relerr4 0.063-0.072 against noise 0.059-0.063; 0.8-1.5% of blocks beyond 4σ; 22-29 s). On the others, seeds
+// 0 and 1: caustic relerr4 0.14 (noise 0.20), z -0.8, no blocks beyond 4σ, then relerr4 0.30 (noise 0.21), z
+// +2.4, 4.3% of blocks (heavy tails through the rough lens; the derivative is noise at this budget, relerr
+// expected from noise 0.55; 33-43 s); teapot z +0.3 then +1.5, relerr4 0.072 (0.056) then 0.052 (0.057),
+// 1.4% then 4.0% of blocks; glass_box (seed 0) relerr4 0.34 (0.37), mean 0.022 against 0.034, z -1.3, 4.6% of
+// blocks, 87 s.
+const char* war_bdpt_open(const std::string& scene) {
+    if (scene == "caustic")
+        return "heavy-tailed through the rough lens (seed 1: 4.3% of blocks beyond 4 sigma)";
+    if (scene == "teapot") return "heavy-tailed (seed 1: 4.0% of blocks beyond 4 sigma)";
+    if (scene == "glass_box")
+        return "heavy-tailed behind the rough walls (4.6% of blocks beyond 4 sigma), 87 s";
+    return nullptr;
+}
 
 // Cases a method does not pass (reported as skipped, never as passed). Measured at 24 × 24, 512 spp, 16
 // batches, over seeds (PENUMBRA_TEST_SEED), against the stored references. psdr passes teapot in both forms
@@ -116,6 +133,7 @@ const char* open_problem(const std::string& label, const std::string& scene) {
                "sigma)";
     if (label == "psdr_material" && scene == "caustic")
         return "heavy-tailed through the rough lens (1 of 3 seeds: 4.2% of blocks beyond 4 sigma)";
+    if (label == "war_bdpt") return war_bdpt_open(scene);
     return nullptr;
 }
 

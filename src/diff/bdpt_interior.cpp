@@ -9,8 +9,6 @@
 
 namespace penumbra {
 
-namespace {
-
 // The bdpt integrator's settings, or the path settings of other integrators (power heuristic).
 BDPTSettings bdpt_settings(const Scene& scene, const PathSettings& path) {
     if (const auto* bdpt = dynamic_cast<const BidirectionalPathTracer*>(scene.integrator.get())) {
@@ -24,6 +22,8 @@ BDPTSettings bdpt_settings(const Scene& scene, const PathSettings& path) {
     s.hide_emitters = path.hide_emitters;
     return s;
 }
+
+namespace {
 
 // f / detach(f), one where the reference value vanishes (the strategy's contribution does too).
 Var relative(const Var& f) { return f.v != 0.f && std::isfinite(f.v) ? f / Var(f.v) : Var(1.f); }

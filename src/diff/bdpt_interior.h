@@ -19,6 +19,7 @@
 // unidirectional estimator.
 #pragma once
 #include "diff/interior_media.h"
+#include "render/bdpt_subpaths.h"
 
 #include <string>
 
@@ -31,6 +32,8 @@ enum class InteriorEstimator {
 };
 
 InteriorEstimator parse_interior_estimator(const std::string& name);
+// The bdpt integrator's settings (strategy views off), or `path`'s for other integrators.
+BDPTSettings bdpt_settings(const Scene& scene, const PathSettings& path);
 bool bidirectional_interior(const Scene& scene, InteriorEstimator estimator);
 // Throws when the scene has what the bidirectional estimator does not differentiate (see above).
 void require_bidirectional_support(const Scene& scene);

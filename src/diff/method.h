@@ -114,5 +114,6 @@ MethodInfo psdr_method_info();
 MethodInfo paths_method_info();
 MethodInfo was_method_info();
 MethodInfo war_method_info();
+MethodInfo war_bdpt_method_info();
 
 } // namespace penumbra
