@@ -188,7 +188,7 @@ Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, WarRng& rng, in
 // (diff/pixel_boundary.h): the divergence theorem of Eq. 34 at p_1 with a field that does not vanish where
 // s(p_1) crosses them. Zero for the environment seen directly (its film position does not move:
 // camera_sample). The auxiliary stream is the edge sample's own.
-Var film_edge_velocity(const WarContext& c, uint64_t seed, const Vec2f& s, const Vec2f& across,
+Var film_edge_velocity(const WarScene& c, uint64_t seed, const Vec2f& s, const Vec2f& across,
                        uint64_t stream, RayCounter& rays) {
     const Sensor& sensor = *c.scene.sensor;
     const Ray ray = sensor.sample_ray(s, Vec2f(0.5f)).first;
@@ -197,7 +197,7 @@ Var film_edge_velocity(const WarContext& c, uint64_t seed, const Vec2f& s, const
     if (!first.is_valid()) return Var(0.f);
     WarRng rng(seed ^ 0x5851F42D4C957F2DULL, stream, 0);
     const WarNeighbor camera{Interaction3f{Infinity, ray.o, Vec3f(0.f)}, c.form.camera_position(ray.o)};
-    const WarVertex x1 = war_vertex(c.field, first, camera, rng, rays.rays);
+    const WarVertex x1 = war_vertex(c, first, camera, rng, rays.rays);
     Vec2<Var> st;
     Var jacobian;
     if (!sensor.film_position(c.form.to_reference_camera(x1.si.p, ray.o),
@@ -206,9 +206,11 @@ Var film_edge_velocity(const WarContext& c, uint64_t seed, const Vec2f& s, const
     return (st.x - Var(s.x)) * Var(across.x) + (st.y - Var(s.y)) * Var(across.y);
 }
 
-// The edge term with about `spp` samples per pixel whose filter jumps at its own edges (box: ~2 unit segments
-// per pixel), `spp` per unit of the film's edge otherwise.
-PixelBoundary film_edge_term(const WarContext& c, uint64_t seed, int spp) {
+} // namespace
+
+// About `spp` samples per pixel whose filter jumps at its own edges (box: ~2 unit segments per pixel), `spp`
+// per unit of the film's edge otherwise.
+PixelBoundary war_film_edge_term(const WarScene& c, uint64_t seed, int spp) {
     const bool box = c.scene.sensor->film->rfilter->plugin == "box";
     return PixelBoundary(
         c.scene,
@@ -218,16 +220,17 @@ PixelBoundary film_edge_term(const WarContext& c, uint64_t seed, int spp) {
         box ? std::max(1, spp / 2) : spp);
 }
 
-BoundaryOptions film_edge_options(const WarContext& c, const WarOptions& options, uint64_t seed,
-                                  SampleCost& cost) {
+BoundaryOptions war_film_edge_options(const WarOptions& options, uint64_t seed, SampleCost& cost) {
     BoundaryOptions bo;
     bo.seed = seed;
     bo.threads = options.threads;
-    bo.path = c.settings;
+    bo.path = options.path;
     bo.first_vertex = FirstVertex::Material;
     bo.cost = &cost;
     return bo;
 }
+
+namespace {
 
 bool finite(const Color3<Var>& v) {
     return std::isfinite(v.x.v) && std::isfinite(v.y.v) && std::isfinite(v.z.v);
@@ -309,8 +312,8 @@ DerivativeImage war_derivative(const Scene& scene, const Parameters& params, con
         const uint64_t seed = options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b);
         PixelSums s = forward_batch(c, options, seed, progress, cost);
         SampleCost edge_cost;
-        const Image edges = film_edge_term(c, seed, options.spp)
-                                .derivative(params, film_edge_options(c, options, seed, edge_cost));
+        const Image edges = war_film_edge_term(c.field, seed, options.spp)
+                                .derivative(params, war_film_edge_options(options, seed, edge_cost));
         cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
         for (size_t i = 0; i < edges.pixels.size(); ++i)
             s.derivative.pixels[i] += edges.pixels[i];
@@ -378,8 +381,8 @@ Gradient war_gradient(const Scene& scene, const Parameters& params, const Image&
         options.progress);
     std::vector<double> edges(dim, 0.0);
     SampleCost edge_cost;
-    film_edge_term(c, options.seed, options.spp)
-        .gradient(params, adjoint, film_edge_options(c, options, options.seed, edge_cost), edges);
+    war_film_edge_term(c.field, options.seed, options.spp)
+        .gradient(params, adjoint, war_film_edge_options(options, options.seed, edge_cost), edges);
     cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
     for (size_t k = 0; k < dim; ++k)
         result.values[k] += edges[k];

@@ -26,6 +26,7 @@
 // film velocity of the reparameterized first vertex seen there.
 #pragma once
 #include "diff/interior.h"
+#include "diff/pixel_boundary.h"
 #include "diff/war_field.h"
 
 namespace penumbra {
@@ -45,6 +46,12 @@ struct WarOptions {
 void require_war_support(const Scene& scene, const Parameters& params);
 
 // Forward mode: dI/dθ along params.direction() (with per-pixel standard errors over the batches).
+// The flux of the reparameterized first vertex across the edges where the filters jump (a box filter's pixel
+// edges, the film's edge without sample_border): diff/pixel_boundary.h with the film velocity of the warped
+// first vertex seen at the edge point. war and war-bdpt add it per batch seed.
+PixelBoundary war_film_edge_term(const WarScene& field, uint64_t seed, int spp);
+BoundaryOptions war_film_edge_options(const WarOptions& options, uint64_t seed, SampleCost& cost);
+
 DerivativeImage war_derivative(const Scene& scene, const Parameters& params, const WarOptions& options);
 // Reverse mode: dL/dθ = Σ_pixels adjoint · dI/dθ for every enabled parameter scalar.
 Gradient war_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,

@@ -145,8 +145,7 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, WarRng& rng, int p
 
     // The camera subpath, each vertex warped given the previous one (z_1 given the camera).
     const Vec3<Var> o = c.form.camera_position(shot.ray.o);
-    const WarNeighbor camera{Interaction3f{Infinity, shot.ray.o, Vec3f(0.f)}, o,
-                             film.sample_border ? nullptr : &sensor};
+    const WarNeighbor camera{Interaction3f{Infinity, shot.ray.o, Vec3f(0.f)}, o};
     z.assign(2, MeasuredVertex<Var>());
     z_material.assign(2, o);
     z[1] = warped_vertex(c, camera_path[1], true, camera, rng, rays, &z_material[1]);
@@ -269,8 +268,9 @@ DerivativeImage war_bdpt_derivative(const Scene& scene, const Parameters& params
         Image p(film.width, film.height), d(film.width, film.height);
         // Per pixel sums; a pixel is filled by one thread.
         tbb::enumerable_thread_specific<std::pair<Vec3d, Vec3d>> sums;
+        const uint64_t seed = options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b);
         for_each_sample(
-            c, options, options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b), progress, cost,
+            c, options, seed, progress, cost,
             [&](int, int, const Color3<Var>& v) {
                 std::vector<float>& tangent = tangents.local();
                 Tape::current().forward(params.direction().data(), tangent);
@@ -285,6 +285,13 @@ DerivativeImage war_bdpt_derivative(const Scene& scene, const Parameters& params
                 d.at(x, y) = Color3f(ds / double(options.spp));
                 ps = ds = Vec3d(0.0);
             });
+        // The flux across the edges where the filters jump (diff/war.h).
+        SampleCost edge_cost;
+        const Image edges = war_film_edge_term(c.field, seed, options.spp)
+                                .derivative(params, war_film_edge_options(options, seed, edge_cost));
+        cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
+        for (size_t i = 0; i < edges.pixels.size(); ++i)
+            d.pixels[i] += edges.pixels[i];
         primal.add(p);
         derivative.add(d);
     }
@@ -331,6 +338,10 @@ Gradient war_bdpt_gradient(const Scene& scene, const Parameters& params, const I
             result.primal.at(x, y) = Color3f(l.primal / double(options.spp));
             l.primal = Vec3d(0.0);
         });
+    SampleCost edge_cost;
+    war_film_edge_term(c.field, options.seed, options.spp)
+        .gradient(params, adjoint, war_film_edge_options(options, options.seed, edge_cost), result.values);
+    cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
     result.cost = cost.get();
     for (const Local& l : locals)
         for (size_t k = 0; k < dim; ++k)
