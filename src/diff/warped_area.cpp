@@ -48,14 +48,13 @@ struct WasContext {
     PathSettings settings;
     float sigma;      // the film auxiliary distribution's standard deviation (pixels): the filter's
     Vec3f camera;     // the center of projection
-    bool film_edge;    // the film's edge cuts the filters (no sample_border): a static discontinuity
     bool filter_jumps; // the filter jumps at its support's edge (box): a static discontinuity per pixel
     float film_scale;  // the boundary test's distance scale on the film: (pixels per radian)² / σ²
 
     WasContext(const Scene& s, const Parameters& p, const WasOptions& o)
         : scene(s), params(p), form(s, p, FirstVertex::Material), boundary(s), warp(o.warp), settings(o.path),
           sigma(filter_sigma(*s.sensor->film->rfilter)), camera(s.sensor->to_world.apply_point(Vec3f(0.f))),
-          film_edge(!s.sensor->film->sample_border), filter_jumps(jumps(*s.sensor->film->rfilter)) {
+          filter_jumps(jumps(*s.sensor->film->rfilter)) {
         // Pixels per radian at the film's center.
         const Film& film = *s.sensor->film;
         const Vec2f center(0.5f * float(film.width), 0.5f * float(film.height));
