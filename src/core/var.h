@@ -42,6 +42,12 @@ public:
         leaves_.clear();
     }
     size_t size() const { return nodes_.size(); }
+    size_t leaf_count() const { return leaves_.size(); }
+    // Drops what was recorded after the tape had `nodes` nodes and `leaves` leaves (a scratch computation).
+    void rewind(size_t nodes, size_t leaves) {
+        nodes_.resize(nodes);
+        leaves_.resize(leaves);
+    }
 
     // Forward mode: the tangent of every node for the parameter-space direction `direction` (tangent[id]).
     void forward(const float* direction, std::vector<float>& tangent) const {
