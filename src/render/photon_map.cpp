@@ -23,8 +23,14 @@ void PhotonMap::build(std::vector<Photon> photons, float cell_size) {
         start_[b + 1] += start_[b];
     std::vector<uint32_t> next(start_.begin(), start_.end() - 1);
     photons_.resize(photons.size());
-    for (size_t i = 0; i < photons.size(); ++i)
-        photons_[next[buckets[i]]++] = photons[i];
+    positions_.resize(photons.size());
+    cells_.resize(photons.size());
+    for (size_t i = 0; i < photons.size(); ++i) {
+        const uint32_t j = next[buckets[i]]++;
+        photons_[j] = photons[i];
+        positions_[j] = photons[i].p;
+        cells_[j] = cell_key(cell_of(photons[i].p));
+    }
 }
 
 } // namespace penumbra

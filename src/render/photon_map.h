@@ -38,12 +38,12 @@ class PhotonMap {
                 for (int x = lo.x; x <= hi.x; ++x) {
                     const Vec3i cell(x, y, z);
                     const uint32_t b = bucket(cell);
+                    const uint64_t key = cell_key(cell);
                     for (uint32_t i = start_[b]; i < start_[b + 1]; ++i) {
-                        const Photon& ph = photons_[i];
                         // Other cells share the bucket: keep this cell's photons only (no double counting).
-                        if (cell_of(ph.p) != cell) continue;
-                        const float d2 = squared_norm(ph.p - p);
-                        if (d2 < r2) visit(ph, d2);
+                        if (cells_[i] != key) continue;
+                        const float d2 = squared_norm(positions_[i] - p);
+                        if (d2 < r2) visit(photons_[i], d2);
                     }
                 }
     }
@@ -52,11 +52,16 @@ class PhotonMap {
     struct Vec3i {
         int x, y, z;
         Vec3i(int x_, int y_, int z_) : x(x_), y(y_), z(z_) {}
-        bool operator!=(const Vec3i& o) const { return x != o.x || y != o.y || z != o.z; }
     };
     Vec3i cell_of(const Vec3f& p) const {
         return {int(std::floor(p.x * inv_cell_)), int(std::floor(p.y * inv_cell_)),
                 int(std::floor(p.z * inv_cell_))};
+    }
+    // The cell's coordinates modulo 2^21, packed: distinct for the cells of one query, and a photon of a
+    // far cell with the same key is rejected by its distance.
+    static uint64_t cell_key(const Vec3i& c) {
+        return (uint64_t(uint32_t(c.x) & 0x1fffffu) << 42) | (uint64_t(uint32_t(c.y) & 0x1fffffu) << 21) |
+               uint64_t(uint32_t(c.z) & 0x1fffffu);
     }
     // Teschner et al. 2003's spatial hash.
     uint32_t bucket(const Vec3i& c) const {
@@ -65,6 +70,9 @@ class PhotonMap {
     }
 
     std::vector<Photon> photons_; // sorted by bucket
+    // photons_[i]'s position and the key of its cell, apart for a compact scan.
+    std::vector<Vec3f> positions_;
+    std::vector<uint64_t> cells_;
     std::vector<uint32_t> start_; // photons of bucket b: [start_[b], start_[b + 1])
     float inv_cell_ = 1.f;
     uint32_t mask_ = 0;
