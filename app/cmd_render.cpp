@@ -135,7 +135,7 @@ void add_render_commands(CLI::App& app) {
     render->add_option("--seed", opt->seed, "random seed");
     render->add_option("--threads", opt->threads, "worker threads (default: all)")->check(CLI::NonNegativeNumber);
     render->add_option("-D", opt->defines, "override a <default> value: name=value");
-    render->add_option("--integrator", opt->integrator, "replace the scene's integrator (path, volpath, volpathmis, bdpt, direct, ptracer)");
+    render->add_option("--integrator", opt->integrator, "replace the scene's integrator (path, volpath, volpathmis, bdpt, direct, ptracer, sppm)");
     render->add_option("--sensor", opt->sensor,
                        "the sensor to render: an index (default 0) or a sensor's id");
     render->add_flag("-q,--quiet", opt->quiet, "no progress bar");

@@ -4,6 +4,7 @@
 #include "render/moment.h"
 #include "render/path.h"
 #include "render/ptracer.h"
+#include "render/sppm.h"
 #include "render/volpath.h"
 #include "scene/factory.h"
 
@@ -17,6 +18,7 @@ std::shared_ptr<Object> make_integrator(const Properties& props, const LoadConte
     if (type == "ptracer") return std::make_shared<ParticleTracer>(props);
     if (type == "volpath") return std::make_shared<VolPathIntegrator>(props, SpectralMIS::PerSegment);
     if (type == "volpathmis") return std::make_shared<VolPathIntegrator>(props, SpectralMIS::PerPath);
+    if (type == "sppm") return std::make_shared<SPPMIntegrator>(props);
     if (type == "aov") return std::make_shared<AOVIntegrator>(props);
     if (type == "moment") return std::make_shared<MomentIntegrator>(props);
     throw_unsupported_plugin(props, ObjectKind::Integrator);

@@ -1,0 +1,20 @@
+// Density-estimation kernels of photon mapping, as functions of the relative distance t = d / r ∈ [0, 1]
+// between a photon and the density-estimation point. Both are normalized over the disc of radius r:
+// ∫_disc K(|x| / r) / (π r²) dA = 1, so that the estimate is Σ_p K(t_p) Φ_p f_p / (π r²) whatever the kernel.
+// Templated on the scalar type so that the differentiable photon-mapping estimators evaluate the same code.
+#pragma once
+
+namespace penumbra {
+
+enum class PhotonKernel { Constant, Smooth };
+
+// Eq. (22) of paper 003 (Hachisuka et al. 2010): K(t) = 3.5 (1 - 6t⁵ + 15t⁴ - 10t³) for t < 1, else 0;
+// ∫₀¹ (1 - 6t⁵ + 15t⁴ - 10t³) 2πt dt = 2π/7, hence the factor 3.5. The constant kernel is K(t) = 1 for t < 1.
+template <typename T> T photon_kernel(PhotonKernel kernel, const T& t) {
+    if (!(t < T(1))) return T(0);
+    if (kernel == PhotonKernel::Constant) return T(1);
+    const T t3 = t * t * t;
+    return T(3.5) * (T(1) - t3 * (T(10) - t * (T(15) - T(6) * t)));
+}
+
+} // namespace penumbra

@@ -1,0 +1,65 @@
+#include "render/photon_tracing.h"
+
+#include "core/interrupt.h"
+#include "render/bdpt_subpaths.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
+#include <limits>
+
+namespace penumbra {
+
+std::vector<Photon> trace_photons(const Scene& scene, const PhotonTracingSettings& settings, uint64_t seed,
+                                  uint64_t pass, PhotonTracingStats& stats) {
+    if (settings.paths == 0 || scene.emitters.empty()) return {};
+    const uint64_t granularity =
+        settings.granularity > 0 ? settings.granularity : std::max<uint64_t>(1024, settings.paths / 256);
+    const uint64_t n_units = (settings.paths + granularity - 1) / granularity;
+    const size_t max_vertices =
+        settings.max_depth < 0 ? std::numeric_limits<size_t>::max() : size_t(settings.max_depth);
+    BDPTSettings walk;
+    walk.rr_depth = settings.rr_depth;
+    // Infinite lights emit from a disk of the scene's bounding sphere, enlarged as bdpt does.
+    BoundingSphere bounds = scene.bounding_sphere();
+    bounds.radius = std::max(RayEpsilon, bounds.radius * (1.f + RayEpsilon));
+
+    std::vector<std::vector<Photon>> units(n_units);
+    std::atomic<uint64_t> rays{0};
+    tbb::task_arena arena(settings.threads > 0 ? settings.threads : tbb::this_task_arena::max_concurrency());
+    arena.execute([&] {
+        tbb::parallel_for(uint64_t(0), n_units, [&](uint64_t u) {
+            Sampler sampler;
+            RayCounter counter;
+            BDPTContext ctx{scene, walk, sampler, counter, false, false, bounds, nullptr};
+            std::vector<PathVertex> path;
+            const uint64_t end = std::min(settings.paths, (u + 1) * granularity);
+            for (uint64_t i = u * granularity; i < end; ++i) {
+                if ((i & 1023) == 0) check_interrupt();
+                sampler.start(seed ^ 0x5851f42d4c957f2dULL, i, pass);
+                light_subpath(ctx, path, max_vertices);
+                for (size_t j = 1; j < path.size(); ++j) {
+                    const PathVertex& v = path[j];
+                    if (v.type != VertexType::Surface) continue;
+                    const BSDF* bsdf = v.si.bsdf();
+                    if (!bsdf || !bsdf->has(BSDFSmooth)) continue;
+                    units[u].push_back({v.p, v.n, v.wi, v.beta, uint32_t(i), uint16_t(j)});
+                }
+            }
+            rays += counter.rays;
+        });
+    });
+
+    size_t total = 0;
+    for (const auto& unit : units)
+        total += unit.size();
+    std::vector<Photon> photons;
+    photons.reserve(total);
+    for (const auto& unit : units)
+        photons.insert(photons.end(), unit.begin(), unit.end());
+    stats.rays += rays;
+    return photons;
+}
+
+} // namespace penumbra

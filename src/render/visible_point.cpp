@@ -1,0 +1,47 @@
+#include "render/visible_point.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace penumbra {
+
+VisiblePoint trace_visible_point(const Scene& scene, Sampler& sampler, Ray ray, Color3f beta,
+                                 const EyeSubpathSettings& settings, Color3f& emission, RayCounter& rays) {
+    const BSDFContext ctx{TransportMode::Radiance};
+    const int max_depth = settings.max_depth < 0 ? std::numeric_limits<int>::max() : settings.max_depth;
+    float eta = 1.f;
+    for (int depth = 1, crossings = 0; depth <= max_depth && crossings < 256; ++crossings) {
+        ++rays.rays;
+        const SurfaceInteraction3f si = scene.intersect(ray);
+        if (!si.is_valid()) {
+            emission += beta * scene.eval_environment(ray.d);
+            return {};
+        }
+        if (const Emitter* emitter = si.emitter()) emission += beta * emitter->eval(si);
+        const BSDF* bsdf = si.bsdf();
+        if (!bsdf) return {};
+        const bool smooth = bsdf->has(BSDFSmooth), mixed = smooth && bsdf->has(BSDFDelta);
+        if (mixed) beta *= 2.f;
+        if (smooth && (!mixed || sampler.next_1d() < 0.5f)) {
+            if (depth + 1 > max_depth) return {}; // no photon fits
+            return {si, beta, depth};
+        }
+        const float u1 = sampler.next_1d();
+        const auto [bs, weight] = bsdf->sample(ctx, si, u1, sampler.next_2d());
+        if (is_black(weight) || !(bs.sampled_type & BSDFDelta)) return {};
+        beta *= weight;
+        eta *= bs.eta;
+        ray = si.spawn_ray(si.to_world(bs.wo));
+        if (bs.sampled_type == BSDFNull) continue;
+        ++depth;
+        // Russian roulette along long specular chains (Mitsuba 3's survival probability).
+        if (depth > settings.rr_depth) {
+            const float q = std::min(max_component(beta) * eta * eta, 0.95f);
+            if (sampler.next_1d() >= q) return {};
+            beta /= q;
+        }
+    }
+    return {};
+}
+
+} // namespace penumbra
