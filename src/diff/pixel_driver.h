@@ -46,6 +46,7 @@ using TileSamplesFactory = std::function<std::unique_ptr<TileSamples>()>;
 // Tiles whose samples are `f`'s, with no state of their own.
 TileSamplesFactory per_sample(SampleFunction f);
 
+// One estimator's pass over the film: its options, its tiles' samples and what it adds.
 struct PixelLoop {
     PixelLoop(const Scene& s, const Parameters& p, const PixelOptions& o) : scene(s), params(p), options(o) {}
     const Scene& scene;
@@ -57,7 +58,8 @@ struct PixelLoop {
     std::function<PixelBoundary(uint64_t seed)> film_edge;
     // The method named by the warning that point and spot lights' shadows do not move (empty: no warning).
     std::string unwarped_delta_lights;
-    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now(); // of `seconds`
+    // The results' `seconds` count from the loop's making (the estimator's set-up included).
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
 };
 
 // Throws a clear Error unless a parameter is enabled and the scene has a sensor with a film.
