@@ -2,91 +2,31 @@
 // scenes/validation/ against central finite differences (both variants), agreement with psdr, reverse mode
 // against forward mode, determinism, the variance reduction of the control variate and of antithetic
 // auxiliary samples on the paper's flat-emitter example, and the errors for what the method does not do.
-#include "diff/method.h"
 #include "diff/warped_area.h"
-#include "diff_check.h"
+#include "diff_cases.h"
 
 #include <gtest/gtest.h>
-
-#include <map>
-#include <ostream>
 
 using namespace penumbra;
 using namespace penumbra::test;
 
 namespace {
 
-const std::string validation = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/validation/";
+// The validation cases at 16 × 16 with 1024 samples per pixel (16 batches of 64: the estimator's tails are
+// heavy, and batches of a few samples understate its standard errors); the camera motion with a box filter
+// takes the pixel-edge term (diff/warped_area.h).
+const std::vector<ValidationCase>& cases = validation_cases();
 
-uint64_t test_seed() {
-    // PENUMBRA_TEST_SEED re-runs the checks with other random numbers (to see that they do not pass by luck).
-    const char* env = std::getenv("PENUMBRA_TEST_SEED");
-    return env ? std::strtoull(env, nullptr, 10) : 0;
-}
+constexpr int Spp = 1024;
 
-// A validation case: scene, its defines, the parameter, the FD step and samples per pixel and side.
-struct WasCase {
-    std::string label, file;
-    std::map<std::string, std::string> defines;
-    std::string param;
-    double h;
-    int fd_spp;
-};
+LoadedCase load(const ValidationCase& c, int res = 16) { return load_validation(c, res); }
 
-// The boundary validation scenes with the lights warped-area sampling sees (area lights and the
-// environment; the shadows of point and directional lights are outside paper 004, diff/warped_area.h), at
-// 16 × 16 with 1024 samples per pixel (16 batches of 64: the estimator's tails are heavy, and batches of a
-// few samples understate its standard errors). Steps as the psdr tests' (tests/test_diff_boundary.cpp); the
-// camera motion with a Gaussian and a box filter (the pixel-edge term, diff/warped_area.h).
-const std::vector<WasCase> cases = {
-    {"silhouette", "silhouette.xml", {}, "box.rotate=0,1,0", 1e-2, 1024},
-    {"shadow", "shadow.xml", {{"light", "area"}}, "occluder.translate=1,0,0", 2e-2, 2048},
-    {"sky",
-     "shadow.xml",
-     {{"light", "sky"}, {"occluder_height", "0.6"}},
-     "occluder.translate=1,0,0",
-     1e-2,
-     2048},
-    {"glossy_shadow", "glossy_shadow.xml", {{"light", "area"}}, "cube.translate=1,0,0", 2e-2, 1024},
-    {"self_shadow", "self_shadow.xml", {{"light", "area"}}, "lshape.rotate=0,1,0", 1e-2, 1024},
-    {"moving_light", "moving_light.xml", {}, "lamp.translate=1,0,0", 2e-2, 1024},
-    {"camera", "pixel_edges.xml", {{"filter", "gaussian"}}, "cam.translate=1,0,0", 2e-3, 1024},
-    {"camera_box", "pixel_edges.xml", {{"filter", "box"}}, "cam.translate=1,0,0", 2e-3, 1024},
-    {"silhouette_box", "silhouette.xml", {{"filter", "box"}}, "box.rotate=0,1,0", 1e-2, 1024},
-};
-
-struct Loaded {
-    std::unique_ptr<Scene> scene;
-    std::unique_ptr<Parameters> params;
-};
-
-constexpr int Res = 16, Spp = 1024;
-
-Loaded load(const WasCase& c, int res = Res) {
-    std::map<std::string, std::string> defines = c.defines;
-    defines["res"] = std::to_string(res);
-    Loaded l;
-    l.scene = load_scene(validation + c.file, defines);
-    l.params = std::make_unique<Parameters>(*l.scene);
-    l.params->enable({parse_param_selection(c.param)});
-    return l;
-}
-
-MethodDerivative was(const Loaded& l, int spp, const std::map<std::string, std::string>& given,
+MethodDerivative was(const LoadedCase& l, int spp, const std::map<std::string, std::string>& given,
                      uint64_t seed) {
-    MethodOptions o;
-    for (const auto& [k, v] : given)
-        o.set(k, v);
-    MethodRun run;
-    run.spp = spp;
-    run.batches = 16;
-    run.seed = seed;
-    return make_method("was", o)->derivative(*l.scene, *l.params, run);
+    return method_derivative("was", given, l, spp, seed, 16);
 }
 
-void PrintTo(const WasCase& c, std::ostream* os) { *os << c.label; }
-
-class WasBoundaryScenes : public testing::TestWithParam<WasCase> {};
+class WasBoundaryScenes : public testing::TestWithParam<ValidationCase> {};
 
 // Cases where the consistent estimator's bias at the default N' exceeds the test's standard errors (reported
 // as skipped, never as passed; the unbiased variant is checked on them below). Measured at 16 × 16, 1024 spp:
@@ -104,10 +44,10 @@ const char* consistent_bias(const std::string& label) {
 }
 
 TEST_P(WasBoundaryScenes, MatchesFiniteDifferences) {
-    const WasCase& c = GetParam();
+    const ValidationCase& c = GetParam();
     if (const char* why = consistent_bias(c.label)) GTEST_SKIP() << "open: " << why;
     const uint64_t seed = test_seed();
-    Loaded l = load(c);
+    LoadedCase l = load(c);
     RenderOptions ro;
     ro.spp = c.fd_spp;
     ro.seed = 99 + 1000 * seed;
@@ -120,15 +60,15 @@ TEST_P(WasBoundaryScenes, MatchesFiniteDifferences) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Validation, WasBoundaryScenes, testing::ValuesIn(cases),
-                         [](const testing::TestParamInfo<WasCase>& info) { return info.param.label; });
+                         [](const testing::TestParamInfo<ValidationCase>& info) { return info.param.label; });
 
 // The unbiased variant (Algorithm 3: N' ~ geometric, telescoping sum) where the consistent estimator is
 // biased (silhouette, camera) and on two shadows (docs/warped-area-sampling.md): unbiased, with heavy tails,
 // so at twice the budget.
 TEST(WasUnbiased, MatchesFiniteDifferences) {
     const uint64_t seed = test_seed();
-    for (const WasCase& c : {cases[0], cases[1], cases[5], cases[6]}) {
-        Loaded l = load(c);
+    for (const ValidationCase& c : {cases[0], cases[1], cases[5], cases[6]}) {
+        LoadedCase l = load(c);
         RenderOptions ro;
         ro.spp = c.fd_spp;
         ro.seed = 99 + 1000 * seed;
@@ -143,13 +83,9 @@ TEST(WasUnbiased, MatchesFiniteDifferences) {
 
 // was and psdr estimate the same derivative: their difference is noise (the shadow under the area light).
 TEST(WasBoundaryScenes, AgreesWithPsdr) {
-    Loaded l = load(cases[1]);
+    LoadedCase l = load(cases[1]);
     const MethodDerivative w = was(l, Spp, {}, 21);
-    MethodRun run;
-    run.spp = Spp;
-    run.batches = 16;
-    run.seed = 22;
-    const MethodDerivative p = make_method("psdr", MethodOptions())->derivative(*l.scene, *l.params, run);
+    const MethodDerivative p = method_derivative("psdr", {}, l, Spp, 22, 16);
     const DiffCheck check = check_against(w.derivative, w.stderr_img, p.derivative, p.stderr_img);
     std::printf("  was against psdr: %s\n", describe(check).c_str());
     EXPECT_TRUE(check.passes()) << describe(check);
@@ -185,7 +121,7 @@ double mean_variance(const Image& stderr_img, int margin) {
 }
 
 MethodDerivative flat_derivative(int tilt, const std::map<std::string, std::string>& given) {
-    Loaded l;
+    LoadedCase l;
     l.scene = flat_emitter(tilt);
     l.params = std::make_unique<Parameters>(*l.scene);
     l.params->enable({parse_param_selection("emitter.translate=1,0,0")});
@@ -212,70 +148,19 @@ TEST(WasVarianceReduction, ControlVariateOnTheFlatEmitter) {
 // that the seeds agree, and no control variate, which forward mode alone applies) equals the gradient along
 // the direction.
 TEST(WasReverseMode, DotProductWithForwardMode) {
-    Loaded l = load(cases[1], 16);
     MethodOptions o;
     o.set("no-control-variate", "true");
-    auto method = make_method("was", o);
-    MethodRun run;
-    run.spp = 16;
-    run.batches = 1;
-    run.seed = 41;
-    const MethodDerivative d = method->derivative(*l.scene, *l.params, run);
-    Image adjoint(16, 16);
-    for (int y = 0; y < 16; ++y)
-        for (int x = 0; x < 16; ++x)
-            adjoint.at(x, y) = Color3f(0.3f + 0.05f * float(x), 1.f - 0.04f * float(y), 0.5f);
-    const MethodGradient g = method->gradient(*l.scene, *l.params, adjoint, run);
-    double forward = 0, reverse = 0;
-    for (int y = 0; y < 16; ++y)
-        for (int x = 0; x < 16; ++x)
-            for (int k = 0; k < 3; ++k)
-                forward += double(adjoint.at(x, y)[k]) * double(d.derivative.at(x, y)[k]);
-    const std::vector<float>& direction = l.params->direction();
-    for (size_t k = 0; k < g.values.size(); ++k)
-        reverse += g.values[k] * double(direction[k]);
-    std::printf("  <a, Jv> = %.6f, <J^T a, v> = %.6f\n", forward, reverse);
-    EXPECT_GT(std::abs(forward), 1e-3);
-    EXPECT_NEAR(reverse, forward, 1e-4 * std::abs(forward) + 1e-6);
+    expect_reverse_matches_forward("was", o, load(cases[1], 16));
 }
 
 // Same seed, same image, whatever the thread count.
 TEST(WasDeterminism, ThreadCountDoesNotChangeTheDerivative) {
-    Loaded l = load(cases[0], 16);
-    MethodRun run;
-    run.spp = 8;
-    run.batches = 2;
-    run.seed = 5;
-    auto method = make_method("was", MethodOptions());
-    run.threads = 1;
-    const MethodDerivative one = method->derivative(*l.scene, *l.params, run);
-    run.threads = 2;
-    const MethodDerivative two = method->derivative(*l.scene, *l.params, run);
-    EXPECT_EQ(one.derivative.pixels, two.derivative.pixels);
+    expect_thread_count_invariant("was", load(cases[0], 16));
 }
 
 // What the method cannot do is an error naming the way out.
 TEST(WasErrors, MediaIsRefused) {
-    const auto message = [](const std::string& xml, const std::string& param) {
-        auto scene = load_scene_string(xml);
-        Parameters params(*scene);
-        params.enable({parse_param_selection(param)});
-        MethodRun run;
-        run.spp = 1;
-        try {
-            make_method("was", MethodOptions())->derivative(*scene, params, run);
-        } catch (const Error& e) {
-            return std::string(e.what());
-        }
-        return std::string();
-    };
-    const std::string media = message(R"(<scene version="3.0.0">
-      <medium type="homogeneous" id="fog"><float name="sigma_t" value="0.5"/></medium>
-      <sensor type="perspective"><ref name="medium" id="fog"/>
-        <film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
-      <shape type="rectangle" id="plane"><bsdf type="diffuse"/></shape><emitter type="constant"/>
-    </scene>)",
-                                      "plane.translate=1,0,0");
+    const std::string media = derivative_error("was", fog_scene);
     EXPECT_NE(media.find("participating media"), std::string::npos) << media;
 }
 

@@ -8,71 +8,25 @@
 // their noise expectations, 4σ outliers of 2 × 2 blocks). Every parameter moves geometry, so psdr's interior
 // term alone (the method's first term) must fail the same check: the boundary contribution carries visible
 // signal.
-#include "diff/ad_suite.h"
-#include "diff/method.h"
-#include "diff_check.h"
+#include "diff_cases.h"
 
 #include <gtest/gtest.h>
-
-#include <cstdio>
-#include <cstdlib>
-#include <map>
-#include <optional>
-#include <string>
-#include <tuple>
-#include <vector>
 
 using namespace penumbra;
 using namespace penumbra::test;
 
 namespace {
 
-const std::string manifest = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/was/suite.json";
-const std::string reference_cache = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/was/fd";
-// The seed of the stored references (penumbra ad-suite's): independent of the derivative's seeds below.
-constexpr uint64_t ReferenceSeed = 2;
+const PaperSuite paper = paper_suite("was", "suite.json");
 
-// Batches of the derivative: its per-pixel standard errors (t with 15 degrees of freedom, diff_check.h).
-constexpr int DerivativeBatches = 16;
-
-// The derivative methods checked on every scene: a label (the test's name), the method's name in
-// derivative_methods() and its options as on the command line. psdr's automatic first vertex picks the
-// image-space form on the cube and the corkscrew; the material form is checked too (they differ on the
-// corkscrew).
-struct MethodCase {
-    std::string label, name;
-    std::map<std::string, std::string> options;
-};
+// The derivative methods checked on every scene. psdr's automatic first vertex picks the image-space form on
+// the cube and the corkscrew; the material form is checked too (they differ on the corkscrew).
 const std::vector<MethodCase> methods = {
     {"psdr", "psdr", {}},
     {"psdr_material", "psdr", {{"first-vertex", "material"}}},
     {"was", "was", {}},
     {"was_unbiased", "was", {{"was-unbiased", "true"}}},
 };
-
-std::vector<std::string> method_labels() {
-    std::vector<std::string> labels;
-    for (const MethodCase& m : methods)
-        labels.push_back(m.label);
-    return labels;
-}
-
-uint64_t test_seed() {
-    // PENUMBRA_TEST_SEED re-runs the checks with other random numbers (to see that they do not pass by luck).
-    const char* env = std::getenv("PENUMBRA_TEST_SEED");
-    return env ? std::strtoull(env, nullptr, 10) : 0;
-}
-
-std::vector<std::string> scene_names() {
-    try {
-        std::vector<std::string> names;
-        for (const AdSuiteScene& s : load_ad_suite(manifest).scenes)
-            names.push_back(s.name);
-        return names;
-    } catch (const Error&) {
-        return {"manifest"};
-    }
-}
 
 class WasScene : public testing::TestWithParam<std::tuple<std::string, std::string>> {};
 
@@ -118,59 +72,23 @@ const char* open_problem(const std::string& label, const std::string& scene) {
 TEST_P(WasScene, MatchesFiniteDifferences) {
     const auto& [label, name] = GetParam();
     if (const char* why = open_problem(label, name)) GTEST_SKIP() << "open: " << why;
-    const MethodCase* method = nullptr;
-    for (const MethodCase& m : methods)
-        method = m.label == label ? &m : method;
+    const MethodCase* method = find_method_case(methods, label);
     ASSERT_NE(method, nullptr);
-    const AdSuite suite = load_ad_suite(manifest);
-    const AdSuiteScene* found = nullptr;
-    for (const AdSuiteScene& s : suite.scenes)
-        found = s.name == name ? &s : found;
+    const AdSuite suite = load_ad_suite(paper.manifest);
+    const AdSuiteScene* found = find_suite_scene(suite, name);
     ASSERT_NE(found, nullptr);
     const AdSuiteScene& s = *found;
     ASSERT_TRUE(missing_files(s).empty()) << s.file << " needs " << missing_files(s).front()
                                           << " (the build writes it: scripts/make_was_meshes.py)";
-    const uint64_t seed = test_seed();
-    AdSuiteCase c = load_case(s, s.ci_res);
-    const FdSettings ref = fd_settings(suite, s, s.ci_res);
-    const std::optional<FiniteDifference> stored =
-        read_cached_reference(reference_cache, s, s.ci_res, ref.eps, ref.spp, {}, ReferenceSeed);
-    if (!stored)
-        std::printf("  %s: no stored reference matches the scene; computing it (slow)\n", s.name.c_str());
-    const FiniteDifference fd =
-        stored ? *stored
-               : suite_reference(*c.scene, *c.params, ref.eps, ref.spp, ReferenceSeed + 1000 * seed, 0);
-
-    MethodRun run;
     // was at 4 × the budget: its batches of 16 samples understate its heavy-tailed standard errors (4σ
     // outliers in 4% of the cube's blocks at 256 spp).
-    run.spp = method->name == "was" ? 4 * s.spp : s.spp;
-    run.batches = DerivativeBatches;
-    run.seed = 1 + 1000 * seed;
-    MethodOptions options;
-    for (const auto& [key, value] : method->options)
-        options.set(key, value);
-    const MethodDerivative d = make_method(method->name, options)->derivative(*c.scene, *c.params, run);
-    ASSERT_FALSE(d.terms.empty());
-    const DiffCheck total = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
-    std::printf("  %s at %dx%d, %s %d spp (%.2f s, %s), reference h = %g at %d spp per side (%.0f s%s)\n"
-                "  %s: %s\n",
-                s.name.c_str(), s.ci_res, s.ci_res, label.c_str(), run.spp, d.seconds, d.description.c_str(),
-                ref.eps, ref.spp, fd.seconds, stored ? ", stored" : "", label.c_str(), describe(total).c_str());
-    EXPECT_TRUE(total.passes()) << describe(total);
-    // psdr's first term is the interior alone, which must miss the boundary contribution (was has one term).
-    if (d.terms[0].name == "interior") {
-        const DiffCheck interior =
-            check_against(d.terms[0].value, d.terms[0].stderr_img, fd.derivative, fd.stderr_img);
-        std::printf("  interior only: %s\n", describe(interior).c_str());
-        EXPECT_FALSE(interior.passes()) << "the interior term alone should miss the boundary contribution: "
-                                        << describe(interior);
-    }
+    const int spp = method->name == "was" ? 4 * s.spp : s.spp;
+    check_suite_scene(paper, *method, suite, s, spp, {});
 }
 
 INSTANTIATE_TEST_SUITE_P(WasValidation, WasScene,
-                         testing::Combine(testing::ValuesIn(method_labels()),
-                                          testing::ValuesIn(scene_names())),
+                         testing::Combine(testing::ValuesIn(method_labels(methods)),
+                                          testing::ValuesIn(scene_names(paper.manifest))),
                          [](const testing::TestParamInfo<WasScene::ParamType>& info) {
                              return std::get<0>(info.param) + "_" + std::get<1>(info.param);
                          });

@@ -1,20 +1,15 @@
 #include "diff/interior.h"
 
-#include "core/batch_stats.h"
-#include "core/interrupt.h"
 #include "core/stratified.h"
 #include "diff/film_sample.h"
 #include "diff/interior_media.h"
 #include "diff/material_form.h"
+#include "diff/pixel_driver.h"
 #include "render/light_medium.h"
 #include "render/bdpt.h"
 #include "render/path.h"
 #include "render/volpath.h"
-#include "render/tiles.h"
 
-#include <tbb/enumerable_thread_specific.h>
-
-#include <chrono>
 
 namespace penumbra {
 
@@ -102,60 +97,24 @@ Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sa
     return trace_path<Var>(scene, sampler, ray, first, x1, form, settings, rays) * camera_factor;
 }
 
-bool finite(const Color3<Var>& c) { return std::isfinite(c.x.v) && std::isfinite(c.y.v) && std::isfinite(c.z.v); }
-
-float tangent_of(const Var& v, const std::vector<float>& tangent) { return v.id < 0 ? 0.f : tangent[v.id]; }
-
-struct PixelSums {
-    Image primal, derivative;
-};
-
-// One batch of the forward-mode estimator.
-PixelSums forward_batch(const Scene& scene, const Parameters& params, const DiffOptions& options, uint64_t seed,
-                        const std::function<void(float)>& progress, SharedSampleCost& cost) {
-    const Film& film = *scene.sensor->film;
-    PixelSums out{Image(film.width, film.height), Image(film.width, film.height)};
-    const MaterialForm form(scene, params, options.first_vertex);
-    const bool antithetic = options.antithetic && !form.image_space_first_vertex();
+// The interior term's samples on `loop`: sample_contribution, antithetic pairs mirrored, the film position
+// stratified over the pixel's samples.
+void set_interior_samples(PixelLoop& loop, std::shared_ptr<const MaterialForm> form,
+                          const DiffOptions& options) {
+    const Scene& scene = loop.scene;
     const bool media = scene_has_media(scene);
     const bool bidirectional = bidirectional_interior(scene, options.estimator);
+    const bool antithetic = options.antithetic && !form->image_space_first_vertex();
+    loop.antithetic = antithetic;
+    const int spp = options.spp;
     const PathSettings settings = options.path;
-    for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
-        Sampler sampler(*scene.sensor->sampler, antithetic ? (options.spp + 1) / 2 : options.spp);
-        RayCounter rays;
-        uint64_t tape_nodes = 0;
-        std::vector<float> tangent;
-        Tape& tape = Tape::current();
-        for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x) {
-                check_interrupt(); // per pixel: Ctrl-C stops long renders promptly (core/interrupt.h)
-                const uint64_t pixel = uint64_t(y) * film.width + x;
-                Vec3d primal(0.0), derivative(0.0);
-                for (int m = 0; m < options.spp; ++m) {
-                    const bool mirror = antithetic && (m & 1);
-                    sampler.start(seed, pixel, uint64_t(antithetic ? m / 2 : m));
-                    tape.clear();
-                    const PixelStratum stratum(m, options.spp, seed, pixel);
-                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, media, bidirectional, settings, rays);
-                    tape_nodes += tape.size();
-                    if (!finite(c)) continue;
-                    tape.forward(params.direction().data(), tangent);
-                    primal += Vec3d(c.x.v, c.y.v, c.z.v);
-                    const Vec3d d(tangent_of(c.x, tangent), tangent_of(c.y, tangent), tangent_of(c.z, tangent));
-                    if (is_finite(Vec3f(d))) derivative += d;
-                }
-                out.primal.at(x, y) = Color3f(primal / double(options.spp));
-                out.derivative.at(x, y) = Color3f(derivative / double(options.spp));
-            }
-        tape.clear();
-        cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays.rays, tape_nodes});
-    }, progress);
-    return out;
-}
-
-void check_ready(const Scene& scene, const Parameters& params) {
-    if (params.dimension() == 0) throw Error("no parameter is enabled for differentiation");
-    if (!scene.sensor || !scene.sensor->film) throw Error("the scene has no sensor");
+    loop.tiles = per_sample([&scene, form, media, bidirectional, antithetic, spp,
+                             settings](Sampler& sampler, const PixelSample& s, RayCounter& rays) {
+        const bool mirror = antithetic && (s.m & 1);
+        const PixelStratum stratum(s.m, spp, s.seed, s.pixel);
+        return sample_contribution(scene, *form, sampler, s.x, s.y, stratum, mirror, media, bidirectional,
+                                   settings, rays);
+    });
 }
 
 } // namespace
@@ -167,23 +126,12 @@ void require_no_media(const Scene& scene) {
 }
 
 DerivativeImage render_derivative(const Scene& scene, const Parameters& params, const DiffOptions& options) {
-    check_ready(scene, params);
-    if (options.spp <= 0 || options.batches <= 0) throw Error("derivative: spp and batches must be positive");
+    require_film(scene, params);
     if (bidirectional_interior(scene, options.estimator)) require_bidirectional_support(scene);
-    const auto start = std::chrono::steady_clock::now();
-    const int B = options.batches;
-    ImageBatches primal, derivative;
-    SharedSampleCost cost;
-    for (int b = 0; b < B; ++b) {
-        auto progress = options.progress ? std::function<void(float)>([&, b](float f) { options.progress((b + f) / B); })
-                                         : std::function<void(float)>();
-        const PixelSums s = forward_batch(scene, params, options, options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b), progress, cost);
-        primal.add(s.primal);
-        derivative.add(s.derivative);
-    }
-    DerivativeImage result{primal.mean(), derivative.mean(), derivative.standard_error(), 0.0, cost.get()};
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return result;
+    PixelLoop loop(scene, params, options);
+    set_interior_samples(loop, std::make_shared<const MaterialForm>(scene, params, options.first_vertex),
+                         options);
+    return pixel_derivative(loop);
 }
 
 void check_adjoint_size(const Film& film, const Image& adjoint) {
@@ -194,63 +142,15 @@ void check_adjoint_size(const Film& film, const Image& adjoint) {
 }
 
 Gradient render_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const DiffOptions& options) {
-    check_ready(scene, params);
-    const Film& film = *scene.sensor->film;
-    check_adjoint_size(film, adjoint);
-    if (options.spp <= 0) throw Error("gradient: spp must be positive");
-    const auto start = std::chrono::steady_clock::now();
-    const MaterialForm form(scene, params, options.first_vertex);
-    const bool antithetic = options.antithetic && !form.image_space_first_vertex();
-    const bool media = scene_has_media(scene);
-    const bool bidirectional = bidirectional_interior(scene, options.estimator);
-    if (bidirectional) require_bidirectional_support(scene);
-    const size_t dim = size_t(params.dimension());
-    tbb::enumerable_thread_specific<std::vector<double>> gradients([dim] { return std::vector<double>(dim, 0.0); });
-    Gradient result{std::vector<double>(dim, 0.0), {}, Image(film.width, film.height), 0.0, {}};
-    for (const std::string& shape : form.volume_motion().omitted())
+    require_film(scene, params);
+    PixelLoop loop(scene, params, options);
+    const auto form = std::make_shared<const MaterialForm>(scene, params, options.first_vertex);
+    if (bidirectional_interior(scene, options.estimator)) require_bidirectional_support(scene);
+    set_interior_samples(loop, form, options);
+    Gradient result = pixel_gradient(loop, adjoint);
+    for (const std::string& shape : form->volume_motion().omitted())
         result.warnings.push_back("the medium around '" + shape + "' does not follow its vertex_positions (" +
                                   "it touches another shape): their gradient misses the medium's motion");
-    const float inv_spp = 1.f / float(options.spp);
-    SharedSampleCost cost;
-
-    for_each_tile(film.width, film.height, options.threads, [&](int x0, int y0, int x1, int y1) {
-        Sampler sampler(*scene.sensor->sampler, antithetic ? (options.spp + 1) / 2 : options.spp);
-        RayCounter rays;
-        uint64_t tape_nodes = 0;
-        std::vector<float> scratch;
-        std::vector<std::pair<int32_t, float>> seeds(3);
-        std::vector<double>& gradient = gradients.local();
-        Tape& tape = Tape::current();
-        for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x) {
-                check_interrupt(); // per pixel: Ctrl-C stops long renders promptly (core/interrupt.h)
-                const uint64_t pixel = uint64_t(y) * film.width + x;
-                const Color3f a = adjoint.at(x, y) * inv_spp;
-                Vec3d primal(0.0);
-                for (int m = 0; m < options.spp; ++m) {
-                    const bool mirror = antithetic && (m & 1);
-                    sampler.start(options.seed, pixel, uint64_t(antithetic ? m / 2 : m));
-                    tape.clear();
-                    const PixelStratum stratum(m, options.spp, options.seed, pixel);
-                    const Color3<Var> c = sample_contribution(scene, form, sampler, x, y, stratum, mirror, media, bidirectional, options.path, rays);
-                    tape_nodes += tape.size();
-                    if (!finite(c)) continue;
-                    primal += Vec3d(c.x.v, c.y.v, c.z.v);
-                    seeds[0] = {c.x.id, a.x};
-                    seeds[1] = {c.y.id, a.y};
-                    seeds[2] = {c.z.id, a.z};
-                    tape.backward(seeds, gradient.data(), scratch);
-                }
-                result.primal.at(x, y) = Color3f(primal / double(options.spp));
-            }
-        tape.clear();
-        cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays.rays, tape_nodes});
-    }, options.progress);
-    result.cost = cost.get();
-
-    for (const std::vector<double>& g : gradients)
-        for (size_t k = 0; k < dim; ++k) result.values[k] += g[k];
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
 }
 

@@ -7,6 +7,7 @@
 #include "diff/bdpt_interior.h"
 #include "diff/first_vertex.h"
 #include "diff/parameters.h"
+#include "diff/pixel_options.h"
 #include "diff/sample_cost.h"
 #include "render/path_tracer.h"
 
@@ -14,16 +15,10 @@
 
 namespace penumbra {
 
-struct DiffOptions {
-    int spp = 16;              // samples per pixel (per batch)
-    uint64_t seed = 0;
-    int threads = 0;           // 0 = all
+struct DiffOptions : PixelOptions {
     bool antithetic = true;    // pixel-level antithetic pairs (paper 001 §5.1, Fig. 6; material-form first vertex)
     FirstVertex first_vertex = FirstVertex::Auto; // diff/first_vertex.h
-    int batches = 1;           // independent batches, for per-pixel standard errors (forward mode)
-    PathSettings path;         // depth limits of the path sampler
     InteriorEstimator estimator = InteriorEstimator::Auto; // diff/bdpt_interior.h
-    std::function<void(float)> progress;
 };
 
 

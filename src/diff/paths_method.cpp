@@ -1,6 +1,6 @@
 // The method `paths`: the path sampling methods of paper 002 (diff/path_sampling.h) behind the common front
 // of diff/method.h. Non-geometric parameters only.
-#include "diff/method.h"
+#include "diff/method_adapter.h"
 #include "diff/path_sampling.h"
 
 namespace penumbra {
@@ -23,48 +23,29 @@ class PathsMethod final : public DerivativeMethod {
     MethodDerivative derivative(const Scene& scene, const Parameters& params, const MethodRun& run) override {
         if (base_.adaptive && !run.importance)
             throw Error("method paths: adaptive needs a pixel importance (--adjoint: the image |∂L/∂I|)");
-        const DerivativeImage d = path_sampling_derivative(scene, params, options(scene, run, run.batches),
-                                                           run.importance ? *run.importance : Image());
+        const DerivativeImage d =
+            path_sampling_derivative(scene, params, run_options(base_, scene, run, run.batches),
+                                     run.importance ? *run.importance : Image());
         return {d.derivative, d.stderr_img, {}, "path sampling: " + name_, d.seconds};
     }
 
     MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                             const MethodRun& run) override {
-        const SampledGradient g = path_sampling_gradient(scene, params, adjoint, options(scene, run, 1));
-        MethodGradient out;
-        out.values = g.values;
-        out.primal = g.primal;
-        out.description = "paths: " + name_;
-        out.seconds = g.seconds;
-        return out;
+        const PathSamplingOptions o = run_options(base_, scene, run, 1);
+        return method_gradient(path_sampling_gradient(scene, params, adjoint, o), "paths: " + name_);
     }
 
     // PRB's three passes (paper 002 Algorithm 1): pass 1 gets primal-fraction of the samples.
     MethodGradient loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
                                  LossKind loss, const MethodRun& run) override {
         const LossGradient l =
-            path_sampling_loss_gradient(scene, params, target, loss, options(scene, run, 1));
-        MethodGradient out;
-        out.values = l.values;
-        out.primal = l.primal;
-        out.description = "paths: " + name_;
+            path_sampling_loss_gradient(scene, params, target, loss, run_options(base_, scene, run, 1));
+        MethodGradient out = method_gradient(l, "paths: " + name_);
         out.loss = l.loss;
-        out.seconds = l.seconds;
         return out;
     }
 
   private:
-    PathSamplingOptions options(const Scene& scene, const MethodRun& run, int batches) const {
-        PathSamplingOptions o = base_;
-        o.batches = batches;
-        o.spp = std::max(1, run.spp / batches);
-        o.seed = run.seed;
-        o.threads = run.threads;
-        o.path = path_settings(scene);
-        o.progress = run.progress;
-        return o;
-    }
-
     PathSamplingOptions base_;
     std::string name_;
 };

@@ -2,7 +2,7 @@
 // the budget split by diff/budget.h) and `interior` (the material-form interior term alone) behind the common
 // front of diff/method.h.
 #include "diff/budget.h"
-#include "diff/method.h"
+#include "diff/method_adapter.h"
 #include "diff/psdr.h"
 
 #include <chrono>
@@ -74,12 +74,8 @@ class PsdrMethod final : public DerivativeMethod {
         const auto start = std::chrono::steady_clock::now();
         PsdrOptions o = options(scene, params, run, &adjoint);
         o.interior.progress = run.progress;
-        const Gradient g = psdr_gradient(scene, params, adjoint, o);
-        MethodGradient out;
-        out.values = g.values;
-        out.warnings = g.warnings;
-        out.primal = g.primal;
-        out.description = describe(scene, params, o);
+        MethodGradient out =
+            method_gradient(psdr_gradient(scene, params, adjoint, o), describe(scene, params, o));
         out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         return out;
     }

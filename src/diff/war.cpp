@@ -1,18 +1,11 @@
 #include "diff/war.h"
 
-#include "core/batch_stats.h"
-#include "core/interrupt.h"
 #include "diff/film_sample.h"
 #include "diff/material_form.h"
-#include "diff/pixel_boundary.h"
+#include "diff/pixel_driver.h"
 #include "render/emitter_hit.h"
 #include "render/light_medium.h"
 #include "render/mis.h"
-#include "render/tiles.h"
-
-#include <tbb/enumerable_thread_specific.h>
-
-#include <chrono>
 
 namespace penumbra {
 
@@ -47,7 +40,7 @@ Color3<Var> environment(const WarContext& c, const Vec3f& d, const Vec3<Var>& wa
 // delta lights connected in material form without a warp.
 Color3<Var> next_event(const WarContext& c, const BSDF* bsdf, const SurfaceInteraction3f& hit,
                        const SurfaceInteraction<Var>& si, const WarNeighbor& here,
-                       const DirectionSample3f& ds, WarRng& rng, uint64_t& rays) {
+                       const DirectionSample3f& ds, AuxiliaryRng& rng, uint64_t& rays) {
     const BSDFContext ctx{TransportMode::Radiance};
     if (ds.emitter->is_delta()) return next_event_contribution(ctx, bsdf, si, ds, c.form);
     if (const Shape* shape = ds.emitter->shape()) {
@@ -70,7 +63,7 @@ Color3<Var> next_event(const WarContext& c, const BSDF* bsdf, const SurfaceInter
 
 // The radiance leaving the first vertex toward the camera along one path (render/path_tracer.h's sampling in
 // the reference configuration; Algorithm 2 lines 6–17), every vertex warped as it is sampled.
-Color3<Var> warped_path(const WarContext& c, Sampler& sampler, WarRng& rng, const Ray& primary,
+Color3<Var> warped_path(const WarContext& c, Sampler& sampler, AuxiliaryRng& rng, const Ray& primary,
                         const SurfaceInteraction3f& first, const WarVertex& first_vertex, uint64_t& rays) {
     const BSDFContext ctx{TransportMode::Radiance};
     const PathSettings& settings = c.settings;
@@ -156,7 +149,7 @@ Color3<Var> warped_path(const WarContext& c, Sampler& sampler, WarRng& rng, cons
 // One camera sample of pixel (px, py): the film position from the defensive filter mixture
 // (diff/film_sample.h), the first vertex p^D_1 warped conditioned on the camera, and the camera factor
 // P_j(s(x1(θ))) |ds/dA|(θ) J (1 + ∇·v) / (p_s |ds/dA|(θ0)) of the material-form first vertex (paper 001).
-Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, WarRng& rng, int px, int py,
+Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, AuxiliaryRng& rng, int px, int py,
                           uint64_t& rays) {
     const Sensor& sensor = *c.scene.sensor;
     const Film& film = *sensor.film;
@@ -195,7 +188,7 @@ Var film_edge_velocity(const WarScene& c, uint64_t seed, const Vec2f& s, const V
     ++rays.rays;
     const SurfaceInteraction3f first = c.scene.intersect(ray);
     if (!first.is_valid()) return Var(0.f);
-    WarRng rng(seed ^ 0x5851F42D4C957F2DULL, stream, 0);
+    AuxiliaryRng rng(seed ^ 0x5851F42D4C957F2DULL, stream, 0, WarSalt);
     const WarNeighbor camera{Interaction3f{Infinity, ray.o, Vec3f(0.f)}, c.form.camera_position(ray.o)};
     const WarVertex x1 = war_vertex(c, first, camera, rng, rays.rays);
     Vec2<Var> st;
@@ -206,87 +199,32 @@ Var film_edge_velocity(const WarScene& c, uint64_t seed, const Vec2f& s, const V
     return (st.x - Var(s.x)) * Var(across.x) + (st.y - Var(s.y)) * Var(across.y);
 }
 
-} // namespace
-
-// About `spp` samples per pixel whose filter jumps at its own edges (box: ~2 unit segments per pixel), `spp`
-// per unit of the film's edge otherwise.
+// The flux across the edges where the filters jump: diff/pixel_boundary.h with the film velocity of the
+// warped first vertex seen at the edge point.
 PixelBoundary war_film_edge_term(const WarScene& c, uint64_t seed, int spp) {
-    const bool box = c.scene.sensor->film->rfilter->plugin == "box";
     return PixelBoundary(
         c.scene,
         [&c, seed](const Vec2f& s, const Vec2f& across, uint64_t stream, RayCounter& rays) {
             return film_edge_velocity(c, seed, s, across, stream, rays);
         },
-        box ? std::max(1, spp / 2) : spp);
-}
-
-BoundaryOptions war_film_edge_options(const WarOptions& options, uint64_t seed, SampleCost& cost) {
-    BoundaryOptions bo;
-    bo.seed = seed;
-    bo.threads = options.threads;
-    bo.path = options.path;
-    bo.first_vertex = FirstVertex::Material;
-    bo.cost = &cost;
-    return bo;
-}
-
-namespace {
-
-bool finite(const Color3<Var>& v) {
-    return std::isfinite(v.x.v) && std::isfinite(v.y.v) && std::isfinite(v.z.v);
-}
-float tangent_of(const Var& v, const std::vector<float>& tangent) { return v.id < 0 ? 0.f : tangent[v.id]; }
-
-struct PixelSums {
-    Image primal, derivative;
-};
-
-// One batch of the forward-mode estimator. Random numbers depend only on (seed, pixel, sample): tiles and
-// threads do not change them.
-PixelSums forward_batch(const WarContext& c, const WarOptions& options, uint64_t seed,
-                        const std::function<void(float)>& progress, SharedSampleCost& cost) {
-    const Film& film = *c.scene.sensor->film;
-    PixelSums out{Image(film.width, film.height), Image(film.width, film.height)};
-    for_each_tile(
-        film.width, film.height, options.threads,
-        [&](int x0, int y0, int x1, int y1) {
-            Sampler sampler(*c.scene.sensor->sampler, options.spp);
-            uint64_t rays = 0, tape_nodes = 0;
-            std::vector<float> tangent;
-            Tape& tape = Tape::current();
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x) {
-                    check_interrupt();
-                    const uint64_t pixel = uint64_t(y) * film.width + x;
-                    Vec3d primal(0.0), derivative(0.0);
-                    for (int m = 0; m < options.spp; ++m) {
-                        sampler.start(seed, pixel, uint64_t(m));
-                        WarRng rng(seed, pixel, uint64_t(m));
-                        tape.clear();
-                        const Color3<Var> v = camera_sample(c, sampler, rng, x, y, rays);
-                        tape_nodes += tape.size();
-                        if (!finite(v)) continue;
-                        tape.forward(c.params.direction().data(), tangent);
-                        primal += Vec3d(v.x.v, v.y.v, v.z.v);
-                        const Vec3d d(tangent_of(v.x, tangent), tangent_of(v.y, tangent),
-                                      tangent_of(v.z, tangent));
-                        if (is_finite(Vec3f(d))) derivative += d;
-                    }
-                    out.primal.at(x, y) = Color3f(primal / double(options.spp));
-                    out.derivative.at(x, y) = Color3f(derivative / double(options.spp));
-                }
-            tape.clear();
-            cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays, tape_nodes});
-        },
-        progress);
-    return out;
+        film_edge_strata(*c.scene.sensor->film, spp));
 }
 
 } // namespace
 
+void set_war_samples(PixelLoop& loop, std::shared_ptr<const WarScene> field, WarSample sample,
+                     const std::string& method) {
+    loop.tiles =
+        per_sample([sample = std::move(sample)](Sampler& sampler, const PixelSample& s, RayCounter& rays) {
+            AuxiliaryRng rng(s.seed, s.pixel, uint64_t(s.m), WarSalt);
+            return sample(sampler, rng, s.x, s.y, rays.rays);
+        });
+    loop.film_edge = [field, spp = loop.options.spp](uint64_t seed) { return war_film_edge_term(*field, seed, spp); };
+    loop.unwarped_delta_lights = method;
+}
+
 void require_war_support(const Scene& scene, const Parameters& params) {
-    if (params.dimension() == 0) throw Error("no parameter is enabled for differentiation");
-    if (!scene.sensor || !scene.sensor->film) throw Error("the scene has no sensor");
+    require_film(scene, params);
     if (scene_has_media(scene))
         throw Error(
             "method war (paper 000) differentiates surfaces only and the scene has participating media: "
@@ -299,99 +237,13 @@ void require_war_support(const Scene& scene, const Parameters& params) {
 
 DerivativeImage war_derivative(const Scene& scene, const Parameters& params, const WarOptions& options) {
     require_war_support(scene, params);
-    if (options.spp <= 0 || options.batches <= 0) throw Error("derivative: spp and batches must be positive");
-    const auto start = std::chrono::steady_clock::now();
-    const WarContext c(scene, params, options);
-    const int B = options.batches;
-    ImageBatches primal, derivative;
-    SharedSampleCost cost;
-    for (int b = 0; b < B; ++b) {
-        auto progress = options.progress
-                            ? std::function<void(float)>([&, b](float f) { options.progress((b + f) / B); })
-                            : std::function<void(float)>();
-        const uint64_t seed = options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b);
-        PixelSums s = forward_batch(c, options, seed, progress, cost);
-        SampleCost edge_cost;
-        const Image edges = war_film_edge_term(c.field, seed, options.spp)
-                                .derivative(params, war_film_edge_options(options, seed, edge_cost));
-        cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
-        for (size_t i = 0; i < edges.pixels.size(); ++i)
-            s.derivative.pixels[i] += edges.pixels[i];
-        primal.add(s.primal);
-        derivative.add(s.derivative);
-    }
-    DerivativeImage result{primal.mean(), derivative.mean(), derivative.standard_error(), 0.0, cost.get()};
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return result;
+    return pixel_derivative(war_loop<WarContext>(scene, params, options, "war", camera_sample));
 }
 
 Gradient war_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                       const WarOptions& options) {
     require_war_support(scene, params);
-    const Film& film = *scene.sensor->film;
-    check_adjoint_size(film, adjoint);
-    if (options.spp <= 0) throw Error("gradient: spp must be positive");
-    const auto start = std::chrono::steady_clock::now();
-    const WarContext c(scene, params, options);
-    const size_t dim = size_t(params.dimension());
-    tbb::enumerable_thread_specific<std::vector<double>> gradients(
-        [dim] { return std::vector<double>(dim, 0.0); });
-    Gradient result{std::vector<double>(dim, 0.0), {}, Image(film.width, film.height), 0.0, {}};
-    for (const auto& e : scene.emitters)
-        if (e->is_delta() && !e->is_infinite()) {
-            result.warnings.push_back(
-                "method war does not see the motion of shadows cast from point and spot lights");
-            break;
-        }
-    const float inv_spp = 1.f / float(options.spp);
-    SharedSampleCost cost;
-    for_each_tile(
-        film.width, film.height, options.threads,
-        [&](int x0, int y0, int x1, int y1) {
-            Sampler sampler(*scene.sensor->sampler, options.spp);
-            uint64_t rays = 0, tape_nodes = 0;
-            std::vector<float> scratch;
-            std::vector<std::pair<int32_t, float>> seeds(3);
-            std::vector<double>& gradient = gradients.local();
-            Tape& tape = Tape::current();
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x) {
-                    check_interrupt();
-                    const uint64_t pixel = uint64_t(y) * film.width + x;
-                    const Color3f a = adjoint.at(x, y) * inv_spp;
-                    Vec3d primal(0.0);
-                    for (int m = 0; m < options.spp; ++m) {
-                        sampler.start(options.seed, pixel, uint64_t(m));
-                        WarRng rng(options.seed, pixel, uint64_t(m));
-                        tape.clear();
-                        const Color3<Var> v = camera_sample(c, sampler, rng, x, y, rays);
-                        tape_nodes += tape.size();
-                        if (!finite(v)) continue;
-                        primal += Vec3d(v.x.v, v.y.v, v.z.v);
-                        seeds[0] = {v.x.id, a.x};
-                        seeds[1] = {v.y.id, a.y};
-                        seeds[2] = {v.z.id, a.z};
-                        tape.backward(seeds, gradient.data(), scratch);
-                    }
-                    result.primal.at(x, y) = Color3f(primal / double(options.spp));
-                }
-            tape.clear();
-            cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays, tape_nodes});
-        },
-        options.progress);
-    std::vector<double> edges(dim, 0.0);
-    SampleCost edge_cost;
-    war_film_edge_term(c.field, options.seed, options.spp)
-        .gradient(params, adjoint, war_film_edge_options(options, options.seed, edge_cost), edges);
-    cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
-    for (size_t k = 0; k < dim; ++k)
-        result.values[k] += edges[k];
-    result.cost = cost.get();
-    for (const std::vector<double>& g : gradients)
-        for (size_t k = 0; k < dim; ++k)
-            result.values[k] += g[k];
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return result;
+    return pixel_gradient(war_loop<WarContext>(scene, params, options, "war", camera_sample), adjoint);
 }
 
 } // namespace penumbra

@@ -26,32 +26,46 @@
 // film velocity of the reparameterized first vertex seen there.
 #pragma once
 #include "diff/interior.h"
-#include "diff/pixel_boundary.h"
+#include "diff/pixel_driver.h"
 #include "diff/war_field.h"
 
 namespace penumbra {
 
-struct WarOptions {
+struct WarOptions : PixelOptions {
     WarFieldOptions field;
-    int spp = 16; // samples per pixel (per batch)
-    int batches = 1;
-    uint64_t seed = 0;
-    int threads = 0;
-    PathSettings path;
-    std::function<void(float)> progress;
 };
 
 // Throws a clear Error for what the estimator cannot differentiate (media, sensors without one center of
 // projection).
 void require_war_support(const Scene& scene, const Parameters& params);
 
-// Forward mode: dI/dθ along params.direction() (with per-pixel standard errors over the batches).
-// The flux of the reparameterized first vertex across the edges where the filters jump (a box filter's pixel
-// edges, the film's edge without sample_border): diff/pixel_boundary.h with the film velocity of the warped
-// first vertex seen at the edge point. war and war-bdpt add it per batch seed.
-PixelBoundary war_film_edge_term(const WarScene& field, uint64_t seed, int spp);
-BoundaryOptions war_film_edge_options(const WarOptions& options, uint64_t seed, SampleCost& cost);
+// One camera sample of pixel (x, y) with its auxiliary stream: war's and war-bdpt's per-sample functions.
+using WarSample = std::function<Color3<Var>(Sampler&, AuxiliaryRng&, int x, int y, uint64_t& rays)>;
+// The loop's samples (`sample` with the auxiliary stream of each camera sample), war's film-edge term (the
+// flux of the reparameterized first vertex across the edges where the filters jump, diff/pixel_boundary.h,
+// per batch seed) and the warning naming `method` for point and spot lights' shadows. `sample` and `field`
+// keep what they use alive as long as the loop.
+void set_war_samples(PixelLoop& loop, std::shared_ptr<const WarScene> field, WarSample sample,
+                     const std::string& method);
 
+// War's or war-bdpt's loop: what the estimator shares across samples (`Context`, with the field as `field`),
+// made once, and `camera_sample` on every camera sample.
+template <typename Context>
+PixelLoop war_loop(const Scene& scene, const Parameters& params, const WarOptions& options,
+                   const std::string& method,
+                   Color3<Var> (*camera_sample)(const Context&, Sampler&, AuxiliaryRng&, int, int, uint64_t&)) {
+    PixelLoop loop(scene, params, options);
+    const auto c = std::make_shared<const Context>(scene, params, options);
+    set_war_samples(
+        loop, {c, &c->field},
+        [c, camera_sample](Sampler& sampler, AuxiliaryRng& rng, int x, int y, uint64_t& rays) {
+            return camera_sample(*c, sampler, rng, x, y, rays);
+        },
+        method);
+    return loop;
+}
+
+// Forward mode: dI/dθ along params.direction() (with per-pixel standard errors over the batches).
 DerivativeImage war_derivative(const Scene& scene, const Parameters& params, const WarOptions& options);
 // Reverse mode: dL/dθ = Σ_pixels adjoint · dI/dθ for every enabled parameter scalar.
 Gradient war_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,

@@ -1,17 +1,11 @@
 #include "diff/war_bdpt.h"
 
-#include "core/batch_stats.h"
-#include "core/interrupt.h"
 #include "diff/bdpt_interior.h"
 #include "diff/film_sample.h"
 #include "diff/path_measurement.h"
 #include "render/bdpt_connect.h"
 #include "render/bdpt_record.h"
-#include "render/tiles.h"
 
-#include <tbb/enumerable_thread_specific.h>
-
-#include <chrono>
 #include <limits>
 
 namespace penumbra {
@@ -42,7 +36,7 @@ Var relative(const Var& f) { return f.v != 0.f && std::isfinite(f.v) ? f / Var(f
 // The subpath vertex v on the geometry, a surface vertex warped conditioned on its detector-side neighbour y
 // unless `warp` is false (reached along a delta lobe); `material` gets X(p, θ) without the warp.
 MeasuredVertex<Var> warped_vertex(const Context& c, const PathVertex& v, bool warp, const WarNeighbor& y,
-                                  WarRng& rng, uint64_t& rays, Vec3<Var>* material = nullptr) {
+                                  AuxiliaryRng& rng, uint64_t& rays, Vec3<Var>* material = nullptr) {
     const bool surface = v.type == VertexType::Surface || (v.type == VertexType::Light && v.emitter->shape());
     if (!warp || !surface) {
         const MeasuredVertex<Var> m = measured_vertex<Var>(v, c.form);
@@ -74,7 +68,7 @@ Color3<Var> light_head(const Context& c, const BDPTRecord& record, const std::ve
 // constants.
 Color3<Var> area_light_connection(const Context& c, const StrategyRecord& st, const MeasuredVertex<Var>& zt,
                                   const Vec3<Var>& camera_side, const Color3<Var>& head,
-                                  const WarNeighbor& here, WarRng& rng, uint64_t& rays) {
+                                  const WarNeighbor& here, AuxiliaryRng& rng, uint64_t& rays) {
     const DirectionSample3f& ds = st.light_sample;
     const Shape& shape = *ds.emitter->shape();
     const SurfaceInteraction3f light =
@@ -111,7 +105,8 @@ bool camera_factor(const Context& c, const Shot& shot, const MeasuredVertex<Var>
 }
 
 // Σ_{s, t≥2} C_{s,t} f̂(p̄; θ) / f̂(p̄; θ0) times z_1's camera factor: one camera sample (Eq. 54).
-Color3<Var> camera_sample(const Context& c, Sampler& sampler, WarRng& rng, int px, int py, uint64_t& rays) {
+Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng, int px, int py,
+                          uint64_t& rays) {
     thread_local BDPTRecord record;
     thread_local std::vector<PathVertex> camera_path, light_path;
     thread_local std::vector<MeasuredVertex<Var>> z, y, ys;
@@ -202,44 +197,6 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, WarRng& rng, int p
     return L * factor;
 }
 
-bool finite(const Color3<Var>& v) {
-    return std::isfinite(v.x.v) && std::isfinite(v.y.v) && std::isfinite(v.z.v);
-}
-float tangent_of(const Var& v, const std::vector<float>& tangent) { return v.id < 0 ? 0.f : tangent[v.id]; }
-
-// Runs `each(x, y, m, value)` on every camera sample of the film (tiles in parallel) and `done(x, y)` after
-// each pixel; random numbers depend only on (seed, pixel, sample), not on tiles or threads.
-template <typename Each, typename Done>
-void for_each_sample(const Context& c, const WarOptions& options, uint64_t seed,
-                     const std::function<void(float)>& progress, SharedSampleCost& cost, Each&& each,
-                     Done&& done) {
-    const Film& film = *c.scene.sensor->film;
-    for_each_tile(
-        film.width, film.height, options.threads,
-        [&](int x0, int y0, int x1, int y1) {
-            Sampler sampler(*c.scene.sensor->sampler, options.spp);
-            uint64_t rays = 0, tape_nodes = 0;
-            Tape& tape = Tape::current();
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x) {
-                    check_interrupt();
-                    const uint64_t pixel = uint64_t(y) * film.width + x;
-                    for (int m = 0; m < options.spp; ++m) {
-                        sampler.start(seed, pixel, uint64_t(m));
-                        WarRng rng(seed, pixel, uint64_t(m));
-                        tape.clear();
-                        const Color3<Var> v = camera_sample(c, sampler, rng, x, y, rays);
-                        tape_nodes += tape.size();
-                        if (finite(v)) each(x, y, v);
-                    }
-                    done(x, y);
-                }
-            tape.clear();
-            cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays, tape_nodes});
-        },
-        progress);
-}
-
 } // namespace
 
 void require_war_bdpt_support(const Scene& scene, const Parameters& params) {
@@ -253,101 +210,13 @@ void require_war_bdpt_support(const Scene& scene, const Parameters& params) {
 
 DerivativeImage war_bdpt_derivative(const Scene& scene, const Parameters& params, const WarOptions& options) {
     require_war_bdpt_support(scene, params);
-    if (options.spp <= 0 || options.batches <= 0) throw Error("derivative: spp and batches must be positive");
-    const auto start = std::chrono::steady_clock::now();
-    const Context c(scene, params, options);
-    const Film& film = *scene.sensor->film;
-    ImageBatches primal, derivative;
-    SharedSampleCost cost;
-    tbb::enumerable_thread_specific<std::vector<float>> tangents;
-    for (int b = 0; b < options.batches; ++b) {
-        const auto progress =
-            options.progress
-                ? std::function<void(float)>([&, b](float f) { options.progress((b + f) / options.batches); })
-                : std::function<void(float)>();
-        Image p(film.width, film.height), d(film.width, film.height);
-        // Per pixel sums; a pixel is filled by one thread.
-        tbb::enumerable_thread_specific<std::pair<Vec3d, Vec3d>> sums;
-        const uint64_t seed = options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b);
-        for_each_sample(
-            c, options, seed, progress, cost,
-            [&](int, int, const Color3<Var>& v) {
-                std::vector<float>& tangent = tangents.local();
-                Tape::current().forward(params.direction().data(), tangent);
-                auto& [ps, ds] = sums.local();
-                ps += Vec3d(v.x.v, v.y.v, v.z.v);
-                const Vec3d dv(tangent_of(v.x, tangent), tangent_of(v.y, tangent), tangent_of(v.z, tangent));
-                if (is_finite(Vec3f(dv))) ds += dv;
-            },
-            [&](int x, int y) {
-                auto& [ps, ds] = sums.local();
-                p.at(x, y) = Color3f(ps / double(options.spp));
-                d.at(x, y) = Color3f(ds / double(options.spp));
-                ps = ds = Vec3d(0.0);
-            });
-        // The flux across the edges where the filters jump (diff/war.h).
-        SampleCost edge_cost;
-        const Image edges = war_film_edge_term(c.field, seed, options.spp)
-                                .derivative(params, war_film_edge_options(options, seed, edge_cost));
-        cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
-        for (size_t i = 0; i < edges.pixels.size(); ++i)
-            d.pixels[i] += edges.pixels[i];
-        primal.add(p);
-        derivative.add(d);
-    }
-    DerivativeImage result{primal.mean(), derivative.mean(), derivative.standard_error(), 0.0, cost.get()};
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return result;
+    return pixel_derivative(war_loop<Context>(scene, params, options, "war-bdpt", camera_sample));
 }
 
 Gradient war_bdpt_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                            const WarOptions& options) {
     require_war_bdpt_support(scene, params);
-    const Film& film = *scene.sensor->film;
-    check_adjoint_size(film, adjoint);
-    if (options.spp <= 0) throw Error("gradient: spp must be positive");
-    const auto start = std::chrono::steady_clock::now();
-    const Context c(scene, params, options);
-    const size_t dim = size_t(params.dimension());
-    struct Local {
-        std::vector<double> gradient;
-        std::vector<float> scratch;
-        Vec3d primal{0.0};
-    };
-    tbb::enumerable_thread_specific<Local> locals([dim] { return Local{std::vector<double>(dim, 0.0), {}}; });
-    Gradient result{std::vector<double>(dim, 0.0), {}, Image(film.width, film.height), 0.0, {}};
-    for (const auto& e : scene.emitters)
-        if (e->is_delta() && !e->is_infinite()) {
-            result.warnings.push_back(
-                "method war-bdpt does not see the motion of shadows cast from point and spot lights");
-            break;
-        }
-    const float inv_spp = 1.f / float(options.spp);
-    SharedSampleCost cost;
-    for_each_sample(
-        c, options, options.seed, options.progress, cost,
-        [&](int x, int y, const Color3<Var>& v) {
-            Local& l = locals.local();
-            const Color3f a = adjoint.at(x, y) * inv_spp;
-            l.primal += Vec3d(v.x.v, v.y.v, v.z.v);
-            const std::vector<std::pair<int32_t, float>> seeds{{v.x.id, a.x}, {v.y.id, a.y}, {v.z.id, a.z}};
-            Tape::current().backward(seeds, l.gradient.data(), l.scratch);
-        },
-        [&](int x, int y) {
-            Local& l = locals.local();
-            result.primal.at(x, y) = Color3f(l.primal / double(options.spp));
-            l.primal = Vec3d(0.0);
-        });
-    SampleCost edge_cost;
-    war_film_edge_term(c.field, options.seed, options.spp)
-        .gradient(params, adjoint, war_film_edge_options(options, options.seed, edge_cost), result.values);
-    cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
-    result.cost = cost.get();
-    for (const Local& l : locals)
-        for (size_t k = 0; k < dim; ++k)
-            result.values[k] += l.gradient[k];
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return result;
+    return pixel_gradient(war_loop<Context>(scene, params, options, "war-bdpt", camera_sample), adjoint);
 }
 
 } // namespace penumbra

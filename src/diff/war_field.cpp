@@ -129,7 +129,7 @@ WarEstimate estimate_war_field(const Vec3f& n, const Vec3f& p_minus_y, std::span
 }
 
 std::vector<WarAuxiliary> sample_war_auxiliary(const WarScene& s, const SurfaceInteraction3f& hit,
-                                               const WarNeighbor& y, WarRng& rng, uint64_t& rays) {
+                                               const WarNeighbor& y, AuxiliaryRng& rng, uint64_t& rays) {
     const WarFieldOptions& o = s.options;
     const Vec3f p = hit.p, n = normalize(hit.n);
     const float r0 = norm(p - y.reference.p);
@@ -190,8 +190,8 @@ SurfaceInteraction<Var> displaced_vertex(const Parameters& params, const Surface
                                     MovedVertices{*hit.shape, params.motions(hit.shape)});
 }
 
-WarVertex war_vertex(const WarScene& s, const SurfaceInteraction3f& hit, const WarNeighbor& y, WarRng& rng,
-                     uint64_t& rays) {
+WarVertex war_vertex(const WarScene& s, const SurfaceInteraction3f& hit, const WarNeighbor& y,
+                     AuxiliaryRng& rng, uint64_t& rays) {
     const std::vector<WarAuxiliary> aux = sample_war_auxiliary(s, hit, y, rng, rays);
     const WarEstimate e = estimate_war_field(normalize(hit.n), hit.p - y.reference.p, aux, s.options);
     WarVertex out;
@@ -207,7 +207,7 @@ WarVertex war_vertex(const WarScene& s, const SurfaceInteraction3f& hit, const W
 }
 
 WarpEstimate war_direction(const WarScene& s, const Interaction3f& x, const Vec3<Var>& position,
-                           const Vec3f& omega, WarRng& rng, uint64_t& rays) {
+                           const Vec3f& omega, AuxiliaryRng& rng, uint64_t& rays) {
     rays += uint64_t(s.options.directions.aux_count);
     return estimate_warp_at(s.scene, s.form, s.boundary, WarpVertex{x, position}, omega, s.options.directions,
                             rng);

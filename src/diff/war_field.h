@@ -42,7 +42,7 @@
 // (the environment seen along a direction) is warped on the sphere of directions with paper 004's field
 // (diff/warp_field.h), the same construction on that domain.
 #pragma once
-#include "core/rng.h"
+#include "diff/auxiliary_rng.h"
 #include "diff/boundary_test.h"
 #include "diff/material_form.h"
 #include "diff/warp_field.h"
@@ -63,21 +63,8 @@ struct WarFieldOptions {
         directions; // the field on the sphere at a vertex at infinity (paper 004's, diff/warp_field.h)
 };
 
-// A PCG stream of the auxiliary samples of one camera sample, apart from the path sampler's dimensions.
-class WarRng {
-  public:
-    WarRng(uint64_t seed, uint64_t pixel, uint64_t sample)
-        : pcg_(mix_bits(seed ^ mix_bits(pixel * 0x9E3779B97F4A7C15ULL + sample + 0x5bd1e995ULL)),
-               mix_bits(seed + pixel + 1)) {}
-    float next_1d() { return pcg_.next_float(); }
-    Vec2f next_2d() {
-        const float a = pcg_.next_float();
-        return {a, pcg_.next_float()};
-    }
-
-  private:
-    PCG32 pcg_;
-};
+// War's auxiliary streams, apart from was's for the same camera sample.
+inline constexpr AuxiliarySalt WarSalt{0x5bd1e995ULL, 1};
 
 // w(q; p) and its gradient in p (Eqs. 15–17).
 struct WarWeight {
@@ -125,7 +112,7 @@ struct WarNeighbor {
 // Algorithm 1 lines 5–12 at the surface vertex `hit`: the auxiliary points with their boundary test and
 // discontinuous velocity. `rays` counts the rays traced.
 std::vector<WarAuxiliary> sample_war_auxiliary(const WarScene& s, const SurfaceInteraction3f& hit,
-                                               const WarNeighbor& y, WarRng& rng, uint64_t& rays);
+                                               const WarNeighbor& y, AuxiliaryRng& rng, uint64_t& rays);
 
 // X(p + (θ − θ0) v, θ): the vertex at the displaced material point (barycentrics moved by v on the tape).
 SurfaceInteraction<Var> displaced_vertex(const Parameters& params, const SurfaceInteraction3f& hit,
@@ -138,12 +125,12 @@ struct WarVertex {
     Var jacobian;
     Vec3<Var> material;
 };
-WarVertex war_vertex(const WarScene& s, const SurfaceInteraction3f& hit, const WarNeighbor& y, WarRng& rng,
-                     uint64_t& rays);
+WarVertex war_vertex(const WarScene& s, const SurfaceInteraction3f& hit, const WarNeighbor& y,
+                     AuxiliaryRng& rng, uint64_t& rays);
 
 // The escaped direction ω from the surface vertex x (reference `x`, material motion `position`) warped on the
 // sphere: value ω, tangent V(ω), and 1 + ∇·V.
 WarpEstimate war_direction(const WarScene& s, const Interaction3f& x, const Vec3<Var>& position,
-                           const Vec3f& omega, WarRng& rng, uint64_t& rays);
+                           const Vec3f& omega, AuxiliaryRng& rng, uint64_t& rays);
 
 } // namespace penumbra

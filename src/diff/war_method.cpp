@@ -1,7 +1,7 @@
 // The methods `war` and `war-bdpt`: the unidirectional and bidirectional estimators of warped-area
 // reparameterization in material path space (paper 000, diff/war.h, diff/war_bdpt.h) behind the common front
 // of diff/method.h, with the same options. One term: the whole derivative (interior and boundary together).
-#include "diff/method.h"
+#include "diff/method_adapter.h"
 #include "diff/war_bdpt.h"
 
 #include <cstdio>
@@ -29,44 +29,21 @@ class WarMethod final : public DerivativeMethod {
     }
 
     MethodDerivative derivative(const Scene& scene, const Parameters& params, const MethodRun& run) override {
-        const WarOptions o = options(scene, run, run.batches);
-        const DerivativeImage d =
-            bidirectional_ ? war_bdpt_derivative(scene, params, o) : war_derivative(scene, params, o);
-        MethodDerivative out;
-        out.derivative = d.derivative;
-        out.stderr_img = d.stderr_img;
-        out.terms.push_back({"warped-area", d.derivative, d.stderr_img});
-        out.description = name_;
-        out.seconds = d.seconds;
-        return out;
+        const WarOptions o = run_options(base_, scene, run, run.batches);
+        return one_term_derivative(
+            bidirectional_ ? war_bdpt_derivative(scene, params, o) : war_derivative(scene, params, o),
+            "warped-area", name_);
     }
 
     MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                             const MethodRun& run) override {
-        const WarOptions o = options(scene, run, 1);
-        const Gradient g = bidirectional_ ? war_bdpt_gradient(scene, params, adjoint, o)
-                                          : war_gradient(scene, params, adjoint, o);
-        MethodGradient out;
-        out.values = g.values;
-        out.primal = g.primal;
-        out.warnings = g.warnings;
-        out.description = name_;
-        out.seconds = g.seconds;
-        return out;
+        const WarOptions o = run_options(base_, scene, run, 1);
+        return method_gradient(bidirectional_ ? war_bdpt_gradient(scene, params, adjoint, o)
+                                              : war_gradient(scene, params, adjoint, o),
+                               name_);
     }
 
   private:
-    WarOptions options(const Scene& scene, const MethodRun& run, int batches) const {
-        WarOptions o = base_;
-        o.batches = batches;
-        o.spp = std::max(1, run.spp / batches);
-        o.seed = run.seed;
-        o.threads = run.threads;
-        o.path = path_settings(scene);
-        o.progress = run.progress;
-        return o;
-    }
-
     bool bidirectional_;
     WarOptions base_;
     std::string name_;

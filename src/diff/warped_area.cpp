@@ -1,42 +1,18 @@
 #include "diff/warped_area.h"
 
-#include "core/batch_stats.h"
-#include "core/interrupt.h"
-#include "core/rng.h"
 #include "diff/auxiliary_rays.h"
+#include "diff/auxiliary_rng.h"
 #include "diff/control_variate.h"
 #include "diff/film_sample.h"
 #include "diff/material_form.h"
-#include "diff/pixel_boundary.h"
+#include "diff/pixel_driver.h"
 #include "render/emitter_hit.h"
 #include "render/light_medium.h"
 #include "render/mis.h"
-#include "render/tiles.h"
-
-#include <tbb/enumerable_thread_specific.h>
-
-#include <chrono>
 
 namespace penumbra {
 
 namespace {
-
-// The auxiliary samples' random numbers: a stream of their own per camera sample, so that the unbiased
-// estimator's random sample counts do not shift the path sampler's dimensions (and a path is the same with
-// and without warping).
-class AuxiliaryRng {
-  public:
-    AuxiliaryRng(uint64_t seed, uint64_t pixel, uint64_t sample)
-        : pcg_(mix_bits(seed ^ mix_bits(pixel * 0x9E3779B97F4A7C15ULL + sample)), mix_bits(seed + pixel)) {}
-    float next_1d() { return pcg_.next_float(); }
-    Vec2f next_2d() {
-        const float a = pcg_.next_float();
-        return {a, pcg_.next_float()};
-    }
-
-  private:
-    PCG32 pcg_;
-};
 
 // What the estimator of one scene shares across samples.
 struct WasContext {
@@ -54,7 +30,7 @@ struct WasContext {
     WasContext(const Scene& s, const Parameters& p, const WasOptions& o)
         : scene(s), params(p), form(s, p, FirstVertex::Material), boundary(s), warp(o.warp), settings(o.path),
           sigma(filter_sigma(*s.sensor->film->rfilter)), camera(s.sensor->to_world.apply_point(Vec3f(0.f))),
-          filter_jumps(jumps(*s.sensor->film->rfilter)) {
+          filter_jumps(penumbra::filter_jumps(*s.sensor->film->rfilter)) {
         // Pixels per radian at the film's center.
         const Film& film = *s.sensor->film;
         const Vec2f center(0.5f * float(film.width), 0.5f * float(film.height));
@@ -63,9 +39,6 @@ struct WasContext {
         const float radians = 2.f * std::asin(std::min(1.f, 0.5f * norm(d1 - d0)));
         film_scale = 1.f / (radians * radians * sigma * sigma);
     }
-
-    // Whether the filter is cut at its radius (a box) rather than falling continuously to zero.
-    static bool jumps(const ReconstructionFilter& f) { return f.eval(0.999f * f.radius()) > 0.05f * f.eval(0.f); }
 
     // The standard deviation of the normalized 1D filter profile (its second moment, by quadrature).
     static float filter_sigma(const ReconstructionFilter& f) {
@@ -243,24 +216,14 @@ Var pixel_edge_velocity(const WasContext& c, uint64_t seed, const Vec2f& s, cons
     return (e.position.x - Var(s.x)) * Var(across.x) + (e.position.y - Var(s.y)) * Var(across.y);
 }
 
-// The edge term's samples per unit edge segment: about `spp` per pixel whose filter jumps at its own edges
-// (~2 unit segments per pixel), `spp` per unit of the film's edge otherwise.
+// The film-edge term of a batch seed: V(s) in place of the material velocity.
 PixelBoundary pixel_edge_term(const WasContext& c, uint64_t seed, int spp) {
     return PixelBoundary(
         c.scene,
         [&c, seed](const Vec2f& s, const Vec2f& across, uint64_t stream, RayCounter& rays) {
             return pixel_edge_velocity(c, seed, s, across, stream, rays);
         },
-        c.filter_jumps ? std::max(1, spp / 2) : spp);
-}
-
-BoundaryOptions pixel_edge_options(const WasContext& c, const WasOptions& options, uint64_t seed) {
-    BoundaryOptions bo;
-    bo.seed = seed;
-    bo.threads = options.threads;
-    bo.path = c.settings;
-    bo.first_vertex = FirstVertex::Material;
-    return bo;
+        film_edge_strata(*c.scene.sensor->film, spp));
 }
 
 // One camera sample of pixel (px, py): the film position x (diff/film_sample.h), warped on the film (value x,
@@ -312,11 +275,6 @@ CameraSample camera_sample(const WasContext& c, Sampler& sampler, AuxiliaryRng& 
     out.value = L * weight;
     return out;
 }
-
-bool finite(const Color3<Var>& v) {
-    return std::isfinite(v.x.v) && std::isfinite(v.y.v) && std::isfinite(v.z.v);
-}
-float tangent_of(const Var& v, const std::vector<float>& tangent) { return v.id < 0 ? 0.f : tangent[v.id]; }
 
 // The linear model of Appendix D fitted to a pixel's previous samples: least squares of y ≈ μ_y + ∇y · x for
 // the radiance g (per channel) and the warp V, x the offset from the pixel center.
@@ -379,76 +337,66 @@ class PixelLinearModel {
     int n_ = 0;
 };
 
-struct PixelSums {
-    Image primal, derivative;
+// Was's camera samples of one tile: camera_sample with its own auxiliary stream, and with `control` (forward
+// mode) the control variate of each pixel sample: the linear model fitted to the pixel's previous samples, or
+// until it has enough of them, the previous pixel's of the tile (samples independent of the current one
+// either way, so the control's known mean holds given them; tiles do not depend on the thread count).
+class WasTile final : public TileSamples {
+  public:
+    WasTile(const WasContext& c, bool control) : c_(c), control_(control) {}
+
+    Color3<Var> sample(Sampler& sampler, const PixelSample& s, RayCounter& rays) override {
+        AuxiliaryRng rng(s.seed, s.pixel, uint64_t(s.m));
+        last_ = camera_sample(c_, sampler, rng, s.x, s.y, rays);
+        return last_.value;
+    }
+    void begin_pixel(int x, int y) override {
+        x_ = x, y_ = y;
+        cuts_ = control_ ? film_cuts(*c_.scene.sensor->film, x, y) : std::vector<FilmCut>();
+        model_ = PixelLinearModel();
+    }
+    void correct(const std::vector<float>& tangent, Vec3d& d) override {
+        if (!control_) return;
+        const Film& film = *c_.scene.sensor->film;
+        const Vec2f v(tangent_of(last_.position.x, tangent), tangent_of(last_.position.y, tangent));
+        const Vec2f ratio = filter_gradient_ratio(film, x_, y_, last_.offset, last_.pdf);
+        LinearControlVariate cv;
+        const PixelLinearModel& fitted = model_.ready() ? model_ : previous_;
+        for (int ch = 0; ch < 3; ++ch)
+            if (fitted.fit(ch, cv)) d[ch] += control_correction(cv, cuts_, last_.offset, ratio);
+        if (last_.on_film && std::isfinite(v.x) && std::isfinite(v.y))
+            model_.add(last_.offset, last_.radiance, v);
+    }
+    void end_pixel() override {
+        if (model_.ready()) previous_ = model_;
+    }
+
+  private:
+    const WasContext& c_;
+    bool control_;
+    CameraSample last_;
+    int x_ = 0, y_ = 0;
+    std::vector<FilmCut> cuts_;
+    PixelLinearModel model_, previous_;
 };
 
-// One batch of the forward-mode estimator. The control variate of each pixel sample is the linear model
-// fitted to the pixel's previous samples, or until it has enough of them, the previous pixel's of the tile
-// (samples independent of the current one either way, so the control's known mean holds given them; tiles do
-// not depend on the thread count).
-PixelSums forward_batch(const WasContext& c, const WasOptions& options, uint64_t seed,
-                        const std::function<void(float)>& progress, SharedSampleCost& cost) {
-    const Film& film = *c.scene.sensor->film;
-    PixelSums out{Image(film.width, film.height), Image(film.width, film.height)};
-    for_each_tile(
-        film.width, film.height, options.threads,
-        [&](int x0, int y0, int x1, int y1) {
-            Sampler sampler(*c.scene.sensor->sampler, options.spp);
-            RayCounter rays;
-            uint64_t tape_nodes = 0;
-            std::vector<float> tangent;
-            Tape& tape = Tape::current();
-            PixelLinearModel previous;
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x) {
-                    check_interrupt();
-                    const uint64_t pixel = uint64_t(y) * film.width + x;
-                    // A box filter's gradient term is all at its edges (the pixel-edge term): no control.
-                    const bool control = options.control_variate && !c.filter_jumps;
-                    const std::vector<FilmCut> cuts = control ? film_cuts(film, x, y) : std::vector<FilmCut>();
-                    PixelLinearModel model;
-                    Vec3d primal(0.0), derivative(0.0);
-                    for (int m = 0; m < options.spp; ++m) {
-                        sampler.start(seed, pixel, uint64_t(m));
-                        AuxiliaryRng rng(seed, pixel, uint64_t(m));
-                        tape.clear();
-                        const CameraSample s = camera_sample(c, sampler, rng, x, y, rays);
-                        tape_nodes += tape.size();
-                        if (!finite(s.value)) continue;
-                        tape.forward(c.params.direction().data(), tangent);
-                        const Color3f value(s.value.x.v, s.value.y.v, s.value.z.v);
-                        Vec3d d(tangent_of(s.value.x, tangent), tangent_of(s.value.y, tangent),
-                                tangent_of(s.value.z, tangent));
-                        if (control) {
-                            const Vec2f v(tangent_of(s.position.x, tangent),
-                                          tangent_of(s.position.y, tangent));
-                            const Vec2f ratio = filter_gradient_ratio(film, x, y, s.offset, s.pdf);
-                            LinearControlVariate cv;
-                            const PixelLinearModel& fitted = model.ready() ? model : previous;
-                            for (int ch = 0; ch < 3; ++ch)
-                                if (fitted.fit(ch, cv)) d[ch] += control_correction(cv, cuts, s.offset, ratio);
-                            if (s.on_film && std::isfinite(v.x) && std::isfinite(v.y)) model.add(s.offset, s.radiance, v);
-                        }
-                        primal += Vec3d(value.x, value.y, value.z);
-                        if (is_finite(Vec3f(d))) derivative += d;
-                    }
-                    if (model.ready()) previous = model;
-                    out.primal.at(x, y) = Color3f(primal / double(options.spp));
-                    out.derivative.at(x, y) = Color3f(derivative / double(options.spp));
-                }
-            tape.clear();
-            cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays.rays, tape_nodes});
-        },
-        progress);
-    return out;
+// The loop of was: its tiles (with the control variate in forward mode unless disabled or the filter is a
+// box, whose gradient term is all at its edges: the film-edge term) and the film-edge term.
+PixelLoop was_loop(const Scene& scene, const Parameters& params, const WasOptions& options, bool forward) {
+    require_was_support(scene, params);
+    PixelLoop loop(scene, params, options);
+    const auto c = std::make_shared<const WasContext>(scene, params, options);
+    const bool control = forward && options.control_variate && !c->filter_jumps;
+    loop.tiles = [c, control] { return std::make_unique<WasTile>(*c, control); };
+    loop.film_edge = [c, spp = options.spp](uint64_t seed) { return pixel_edge_term(*c, seed, spp); };
+    loop.unwarped_delta_lights = "was";
+    return loop;
 }
 
 } // namespace
 
 void require_was_support(const Scene& scene, const Parameters& params) {
-    if (params.dimension() == 0) throw Error("no parameter is enabled for differentiation");
-    if (!scene.sensor || !scene.sensor->film) throw Error("the scene has no sensor");
+    require_film(scene, params);
     if (scene_has_media(scene))
         throw Error(
             "method was (paper 004) differentiates surfaces only and the scene has participating media: "
@@ -460,103 +408,12 @@ void require_was_support(const Scene& scene, const Parameters& params) {
 }
 
 DerivativeImage was_derivative(const Scene& scene, const Parameters& params, const WasOptions& options) {
-    require_was_support(scene, params);
-    if (options.spp <= 0 || options.batches <= 0) throw Error("derivative: spp and batches must be positive");
-    const auto start = std::chrono::steady_clock::now();
-    const WasContext c(scene, params, options);
-    const int B = options.batches;
-    ImageBatches primal, derivative;
-    SharedSampleCost cost;
-    for (int b = 0; b < B; ++b) {
-        auto progress = options.progress
-                            ? std::function<void(float)>([&, b](float f) { options.progress((b + f) / B); })
-                            : std::function<void(float)>();
-        const uint64_t seed = options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b);
-        PixelSums s = forward_batch(c, options, seed, progress, cost);
-        BoundaryOptions bo = pixel_edge_options(c, options, seed);
-        SampleCost edge_cost;
-        bo.cost = &edge_cost;
-        const Image edges = pixel_edge_term(c, seed, options.spp).derivative(params, bo);
-        cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
-        for (size_t i = 0; i < edges.pixels.size(); ++i)
-            s.derivative.pixels[i] += edges.pixels[i];
-        primal.add(s.primal);
-        derivative.add(s.derivative);
-    }
-    DerivativeImage result{primal.mean(), derivative.mean(), derivative.standard_error(), 0.0, cost.get()};
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return result;
+    return pixel_derivative(was_loop(scene, params, options, true));
 }
 
 Gradient was_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                       const WasOptions& options) {
-    require_was_support(scene, params);
-    const Film& film = *scene.sensor->film;
-    check_adjoint_size(film, adjoint);
-    if (options.spp <= 0) throw Error("gradient: spp must be positive");
-    const auto start = std::chrono::steady_clock::now();
-    const WasContext c(scene, params, options);
-    const size_t dim = size_t(params.dimension());
-    tbb::enumerable_thread_specific<std::vector<double>> gradients(
-        [dim] { return std::vector<double>(dim, 0.0); });
-    Gradient result{std::vector<double>(dim, 0.0), {}, Image(film.width, film.height), 0.0, {}};
-    for (const auto& e : scene.emitters)
-        if (e->is_delta() && !e->is_infinite()) {
-            result.warnings.push_back(
-                "method was does not see the motion of shadows cast from point and spot lights");
-            break;
-        }
-    const float inv_spp = 1.f / float(options.spp);
-    SharedSampleCost cost;
-    for_each_tile(
-        film.width, film.height, options.threads,
-        [&](int x0, int y0, int x1, int y1) {
-            Sampler sampler(*scene.sensor->sampler, options.spp);
-            RayCounter rays;
-            uint64_t tape_nodes = 0;
-            std::vector<float> scratch;
-            std::vector<std::pair<int32_t, float>> seeds(3);
-            std::vector<double>& gradient = gradients.local();
-            Tape& tape = Tape::current();
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x) {
-                    check_interrupt();
-                    const uint64_t pixel = uint64_t(y) * film.width + x;
-                    const Color3f a = adjoint.at(x, y) * inv_spp;
-                    Vec3d primal(0.0);
-                    for (int m = 0; m < options.spp; ++m) {
-                        sampler.start(options.seed, pixel, uint64_t(m));
-                        AuxiliaryRng rng(options.seed, pixel, uint64_t(m));
-                        tape.clear();
-                        const CameraSample s = camera_sample(c, sampler, rng, x, y, rays);
-                        tape_nodes += tape.size();
-                        if (!finite(s.value)) continue;
-                        primal += Vec3d(s.value.x.v, s.value.y.v, s.value.z.v);
-                        seeds[0] = {s.value.x.id, a.x};
-                        seeds[1] = {s.value.y.id, a.y};
-                        seeds[2] = {s.value.z.id, a.z};
-                        tape.backward(seeds, gradient.data(), scratch);
-                    }
-                    result.primal.at(x, y) = Color3f(primal / double(options.spp));
-                }
-            tape.clear();
-            cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(options.spp), rays.rays, tape_nodes});
-        },
-        options.progress);
-    std::vector<double> edges(dim, 0.0);
-    BoundaryOptions bo = pixel_edge_options(c, options, options.seed);
-    SampleCost edge_cost;
-    bo.cost = &edge_cost;
-    pixel_edge_term(c, options.seed, options.spp).gradient(params, adjoint, bo, edges);
-    cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
-    for (size_t k = 0; k < dim; ++k)
-        result.values[k] += edges[k];
-    result.cost = cost.get();
-    for (const std::vector<double>& g : gradients)
-        for (size_t k = 0; k < dim; ++k)
-            result.values[k] += g[k];
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return result;
+    return pixel_gradient(was_loop(scene, params, options, false), adjoint);
 }
 
 } // namespace penumbra

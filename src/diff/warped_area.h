@@ -26,7 +26,7 @@
 
 namespace penumbra {
 
-struct WasOptions {
+struct WasOptions : PixelOptions {
     // κ, N', antithetic, unbiased (diff/warp_field.h). κ = 1e4 (the paper's); N' = 32 by measurement (the
     // paper's 8 leaves the consistent estimator biased by 15–50% of the boundary derivative on the validation
     // scenes, docs/warped-area-sampling.md).
@@ -36,12 +36,6 @@ struct WasOptions {
         return o;
     }();
     bool control_variate = true; // Appendix D at the camera vertex (forward mode)
-    int spp = 16;                // samples per pixel (per batch)
-    int batches = 1;
-    uint64_t seed = 0;
-    int threads = 0;
-    PathSettings path;
-    std::function<void(float)> progress;
 };
 
 // Throws a clear Error for what the method cannot differentiate (media, sensors without one center of

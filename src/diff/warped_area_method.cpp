@@ -1,6 +1,6 @@
 // The method `was`: warped-area sampling of paper 004 (diff/warped_area.h) behind the common front of
 // diff/method.h. One term: the whole derivative (interior and boundary together).
-#include "diff/method.h"
+#include "diff/method_adapter.h"
 #include "diff/warped_area.h"
 
 #include <cmath>
@@ -27,40 +27,17 @@ class WasMethod final : public DerivativeMethod {
     }
 
     MethodDerivative derivative(const Scene& scene, const Parameters& params, const MethodRun& run) override {
-        const DerivativeImage d = was_derivative(scene, params, options(scene, run, run.batches));
-        MethodDerivative out;
-        out.derivative = d.derivative;
-        out.stderr_img = d.stderr_img;
-        out.terms.push_back({"warped-area", d.derivative, d.stderr_img});
-        out.description = name_;
-        out.seconds = d.seconds;
-        return out;
+        return one_term_derivative(was_derivative(scene, params, run_options(base_, scene, run, run.batches)),
+                                   "warped-area", name_);
     }
 
     MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                             const MethodRun& run) override {
-        const Gradient g = was_gradient(scene, params, adjoint, options(scene, run, 1));
-        MethodGradient out;
-        out.values = g.values;
-        out.primal = g.primal;
-        out.warnings = g.warnings;
-        out.description = name_;
-        out.seconds = g.seconds;
-        return out;
+        const WasOptions o = run_options(base_, scene, run, 1);
+        return method_gradient(was_gradient(scene, params, adjoint, o), name_);
     }
 
   private:
-    WasOptions options(const Scene& scene, const MethodRun& run, int batches) const {
-        WasOptions o = base_;
-        o.batches = batches;
-        o.spp = std::max(1, run.spp / batches);
-        o.seed = run.seed;
-        o.threads = run.threads;
-        o.path = path_settings(scene);
-        o.progress = run.progress;
-        return o;
-    }
-
     WasOptions base_;
     std::string name_;
 };
