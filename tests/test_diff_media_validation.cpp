@@ -13,6 +13,7 @@
 #include "diff/ad_suite.h"
 #include "diff/method.h"
 #include "diff/psdr.h"
+#include "diff_cases.h"
 #include "diff_check.h"
 
 #include <gtest/gtest.h>
@@ -37,28 +38,12 @@ constexpr uint64_t ReferenceSeed = 2;
 // Batches of the derivative: its per-pixel standard errors (t with 15 degrees of freedom, diff_check.h).
 constexpr int DerivativeBatches = 16;
 
-uint64_t test_seed() {
-    // PENUMBRA_TEST_SEED re-runs the checks with other random numbers (to see that they do not pass by luck).
-    const char* env = std::getenv("PENUMBRA_TEST_SEED");
-    return env ? std::strtoull(env, nullptr, 10) : 0;
-}
 
 // Whether the enabled parameters move a shape, the camera or a light (visibility changes: boundary terms).
 bool moves_something(const Parameters& params) {
     for (const auto& [p, index] : params.enabled())
         if (p->kind != Parameter::Kind::Data || p->geometry || p->emitter || p->sensor) return true;
     return false;
-}
-
-std::vector<std::string> scene_names() {
-    try {
-        std::vector<std::string> names;
-        for (const AdSuiteScene& s : load_ad_suite(manifest).scenes)
-            names.push_back(s.name);
-        return names;
-    } catch (const Error&) {
-        return {"manifest"};
-    }
 }
 
 class MediaScene : public testing::TestWithParam<std::string> {};
@@ -103,7 +88,7 @@ TEST_P(MediaScene, MatchesFiniteDifferences) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(MediaValidation, MediaScene, testing::ValuesIn(scene_names()),
+INSTANTIATE_TEST_SUITE_P(MediaValidation, MediaScene, testing::ValuesIn(scene_names(manifest)),
                          [](const testing::TestParamInfo<std::string>& info) { return info.param; });
 
 // Forward and reverse mode on the same samples (psdr_gradient uses the seeds of psdr_derivative's single

@@ -119,6 +119,15 @@ void expect_close(const V3& a, const V3& b, const char* what) {
                                         << b.x << ", " << b.y << ", " << b.z << ")";
 }
 
+// The eye ray d's hits on the mirror and, reflected, on the floor (at θ0).
+std::pair<SurfaceInteraction3f, SurfaceInteraction3f> mirror_path(const Fixture& f, const V3& d) {
+    const SurfaceInteraction3f x2 = f.hit(eye, d);
+    const SurfaceInteraction3f x3 = f.hit(v3(x2.p), reflect(d, mirror_normal));
+    EXPECT_EQ(x2.shape->id, "mirror");
+    EXPECT_EQ(x3.shape->id, "floor");
+    return {x2, x3};
+}
+
 // The mirror's plane under its motion: rotation by θ about `axis` through its center, or translation θ d.
 struct MirrorMotion {
     bool rotate;
@@ -141,10 +150,7 @@ TEST(Epsm, ReflectionAlongAFixedEyeRay) {
     const V3 d = unit({0.05, -0.1, -1});
     for (const auto& [selection, motion] : mirror_motions) {
         Fixture f(selection);
-        const SurfaceInteraction3f x2 = f.hit(eye, d);
-        const SurfaceInteraction3f x3 = f.hit(v3(x2.p), reflect(d, mirror_normal));
-        ASSERT_EQ(x2.shape->id, "mirror");
-        ASSERT_EQ(x3.shape->id, "floor");
+        const auto [x2, x3] = mirror_path(f, d);
         const std::vector<V3> t = f.tangents(
             {EpsmVertex::camera(f3(eye)), EpsmVertex::surface(x2), EpsmVertex::surface(x3)},
             {EpsmConstraint::fixed_direction(0, 1), EpsmConstraint::half_vector(1, 0, 2)});
@@ -197,8 +203,7 @@ TEST(Epsm, MirrorPointConnectingTheEyeToAFixedFloorPoint) {
     const V3 d = unit({0.05, -0.1, -1});
     for (const auto& [selection, motion] : mirror_motions) {
         Fixture f(selection);
-        const SurfaceInteraction3f x2 = f.hit(eye, d);
-        const SurfaceInteraction3f x3 = f.hit(v3(x2.p), reflect(d, mirror_normal));
+        const auto [x2, x3] = mirror_path(f, d);
         const V3 xs = v3(x3.p);
         const std::vector<V3> t = f.tangents(
             {EpsmVertex::camera(f3(eye)), EpsmVertex::surface(x2), EpsmVertex::surface(x3)},
@@ -246,9 +251,7 @@ TEST(Epsm, VertexMergingFollowsThePhoton) {
 // singular system (two constraints on one vertex, none on another) is refused and leaves the tape as it was.
 TEST(Epsm, UnderdeterminedAndSingularSystems) {
     Fixture f("mirror.translate=0,0,1");
-    const V3 d = unit({0.05, -0.1, -1});
-    const SurfaceInteraction3f x2 = f.hit(eye, d);
-    const SurfaceInteraction3f x3 = f.hit(v3(x2.p), reflect(d, mirror_normal));
+    const auto [x2, x3] = mirror_path(f, unit({0.05, -0.1, -1}));
     const std::vector<EpsmVertex> vertices{EpsmVertex::camera(f3(eye)), EpsmVertex::surface(x2),
                                            EpsmVertex::surface(x3)};
     EpsmPath path;

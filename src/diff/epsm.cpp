@@ -114,6 +114,19 @@ void check_constraints(const std::vector<EpsmVertex>& vertices, const std::vecto
     }
 }
 
+// C(X, θ) of every constraint, two components each.
+std::vector<Var> constraint_values(const Parameters& params, const std::vector<EpsmVertex>& vertices,
+                                   const EpsmPath& path, const std::vector<Vec2<Var>>& bary,
+                                   const std::vector<EpsmConstraint>& constraints) {
+    std::vector<Var> c(2 * constraints.size());
+    for (size_t k = 0; k < constraints.size(); ++k) {
+        const Vec2<Var> ck = constraint_value(params, vertices, path, bary, constraints[k]);
+        c[2 * k] = ck.x;
+        c[2 * k + 1] = ck.y;
+    }
+    return c;
+}
+
 // Tangents of the nodes recorded since `first` for a unit direction on leaf parameter `param` (nodes before
 // `first` cannot depend on leaves recorded after it).
 void sweep(const Tape& tape, size_t first, size_t first_leaf, int param, std::vector<float>& tangent) {
@@ -154,13 +167,8 @@ bool solve_epsm(const Parameters& params, const std::vector<EpsmVertex>& vertice
         if (unknown[i] >= 0)
             leaves[i] = Vec2<Var>(Var::parameter(vertices[i].bary.x, dim + 2 * unknown[i]),
                                   Var::parameter(vertices[i].bary.y, dim + 2 * unknown[i] + 1));
-    const EpsmPath scratch = evaluate(params, vertices, leaves);
-    std::vector<Var> c(size_t(2 * m));
-    for (size_t k = 0; k < constraints.size(); ++k) {
-        const Vec2<Var> ck = constraint_value(params, vertices, scratch, leaves, constraints[k]);
-        c[2 * k] = ck.x;
-        c[2 * k + 1] = ck.y;
-    }
+    const std::vector<Var> c =
+        constraint_values(params, vertices, evaluate(params, vertices, leaves), leaves, constraints);
     Eigen::MatrixXd A(2 * m, 2 * m);
     std::vector<float> tangent;
     for (int col = 0; col < 2 * m; ++col) {
@@ -182,13 +190,8 @@ bool solve_epsm(const Parameters& params, const std::vector<EpsmVertex>& vertice
     const Eigen::MatrixXd M = -lu.inverse();
 
     // C(X0, θ): its tangent is ∂C/∂θ. Each unknown u(θ) = u0 + Σ_i M_ji C_i(X0, θ) (Eq. 2, first order).
-    const EpsmPath fixed = evaluate(params, vertices, bary);
-    std::vector<Var> ct(size_t(2 * m));
-    for (size_t k = 0; k < constraints.size(); ++k) {
-        const Vec2<Var> ck = constraint_value(params, vertices, fixed, bary, constraints[k]);
-        ct[2 * k] = ck.x;
-        ct[2 * k + 1] = ck.y;
-    }
+    const std::vector<Var> ct =
+        constraint_values(params, vertices, evaluate(params, vertices, bary), bary, constraints);
     std::vector<Vec2<Var>> solved = bary;
     for (size_t i = 0; i < vertices.size(); ++i) {
         if (unknown[i] < 0) continue;
