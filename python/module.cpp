@@ -7,9 +7,11 @@
 #include "core/progress.h"
 #include "diff/method.h"
 #include "diff/parameter_table.h"
+#include "optim/sinkhorn.h"
 #include "render/render.h"
 #include "scene/scene.h"
 
+#include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -18,6 +20,8 @@
 #include <future>
 #include <mutex>
 #include <thread>
+
+#include <tbb/task_arena.h>
 
 namespace py = pybind11;
 using namespace penumbra;
@@ -305,6 +309,41 @@ PYBIND11_MODULE(_penumbra, m) {
             write_image(path, from_array(a, int(a.shape(1)), int(a.shape(0)), "write_image"));
         },
         py::arg("path"), py::arg("image"));
+    // Entropic optimal transport on 5-D points (optim/sinkhorn.h); `plan` adds the dense n x m plan.
+    m.def(
+        "sinkhorn",
+        [](const Points5& x, const Eigen::VectorXd& a, const Points5& y, const Eigen::VectorXd& b, double blur,
+           double scaling, double position_weight, double tolerance, int max_iterations, int threads,
+           bool plan) {
+            SinkhornOptions o;
+            o.blur = blur;
+            o.scaling = scaling;
+            o.position_weight = position_weight;
+            o.tolerance = tolerance;
+            o.max_iterations = max_iterations;
+            Eigen::MatrixXd dense;
+            const SinkhornResult r = run_interruptible<SinkhornResult>([&] {
+                tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
+                return arena.execute([&] {
+                    SinkhornResult result = sinkhorn(x, a, y, b, o);
+                    if (plan) dense = transport_plan(x, a, y, b, result, o);
+                    return result;
+                });
+            });
+            py::dict out;
+            out["f"] = r.f;
+            out["g"] = r.g;
+            out["matched"] = r.matched;
+            out["epsilon"] = r.epsilon;
+            out["annealing_steps"] = r.annealing_steps;
+            out["iterations"] = r.iterations;
+            out["marginal_error"] = r.marginal_error;
+            if (plan) out["plan"] = dense;
+            return out;
+        },
+        py::arg("x"), py::arg("a"), py::arg("y"), py::arg("b"), py::arg("blur") = 0.01, py::arg("scaling") = 0.9,
+        py::arg("position_weight") = 1.0, py::arg("tolerance") = 1e-3, py::arg("max_iterations") = 1000,
+        py::arg("threads") = 0, py::arg("plan") = false);
     m.def("methods", [] {
         py::list out;
         for (const MethodInfo& info : derivative_methods()) {
