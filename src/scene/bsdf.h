@@ -52,9 +52,16 @@ public:
     // Returns the sample and its weight eval(wo)/pdf (zero weight = failed sample).
     virtual std::pair<BSDFSample, Color3f> sample(const BSDFContext& ctx, const SurfaceInteraction3f& si,
                                                   float sample1, const Vec2f& sample2) const = 0;
+    // delta_weight(): the smooth factor g of the delta lobe that scatters si.wi into wo (paper 003 §4.2.2,
+    // Eq. 16: f = g · h with h the lobe's delta, constant on a manifold that keeps the half vector): the lobe's
+    // sampled weight times its selection probability (dielectric: F R or (1 − F) T η², conductor: F R, null: 1),
+    // evaluated at any wi, so that its derivative follows wi's; zero when no delta lobe leads from wi to wo.
 #define PENUMBRA_BSDF_METHODS(T)                                                                             \
     virtual Color3<T> eval(const BSDFContext& ctx, const SurfaceInteraction<T>& si, const Vec3<T>& wo) const = 0; \
-    virtual T pdf(const BSDFContext& ctx, const SurfaceInteraction<T>& si, const Vec3<T>& wo) const = 0;
+    virtual T pdf(const BSDFContext& ctx, const SurfaceInteraction<T>& si, const Vec3<T>& wo) const = 0;          \
+    virtual Color3<T> delta_weight(const BSDFContext&, const SurfaceInteraction<T>&, const Vec3<T>&) const {     \
+        return Color3<T>(T(0));                                                                              \
+    }
     PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_BSDF_METHODS)
 #undef PENUMBRA_BSDF_METHODS
     // Diffuse reflectance (the `albedo` AOV); zero for non-diffuse materials.
@@ -97,7 +104,8 @@ inline SurfaceInteraction<Var> constant_interaction(const SurfaceInteraction3f& 
     return v;
 }
 
-// CRTP helper: a BSDF implements `template <typename T> Color3<T> eval_t(ctx, si, wo) const` and `pdf_t`.
+// CRTP helper: a BSDF implements `template <typename T> Color3<T> eval_t(ctx, si, wo) const` and `pdf_t`, and a
+// BSDF with delta lobes `delta_weight_t` (without one, delta_weight() is zero).
 template <typename Derived> class BSDFBase : public BSDF {
 public:
 #define PENUMBRA_BSDF_IMPL(T)                                                                                \
@@ -106,6 +114,14 @@ public:
     }                                                                                                        \
     T pdf(const BSDFContext& ctx, const SurfaceInteraction<T>& si, const Vec3<T>& wo) const override {       \
         return static_cast<const Derived*>(this)->template pdf_t<T>(ctx, si, wo);                            \
+    }                                                                                                        \
+    Color3<T> delta_weight(const BSDFContext& ctx, const SurfaceInteraction<T>& si, const Vec3<T>& wo)        \
+        const override {                                                                                     \
+        const auto* d = static_cast<const Derived*>(this);                                                   \
+        if constexpr (requires { d->template delta_weight_t<T>(ctx, si, wo); })                              \
+            return d->template delta_weight_t<T>(ctx, si, wo);                                               \
+        else                                                                                                 \
+            return Color3<T>(T(0));                                                                          \
     }
     PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_BSDF_IMPL)
 #undef PENUMBRA_BSDF_IMPL

@@ -22,6 +22,11 @@ public:
         const T w = weight(si);
         return bsdf_[0]->pdf(ctx, si, wo) * (T(1) - w) + bsdf_[1]->pdf(ctx, si, wo) * w;
     }
+    template <typename T>
+    Color3<T> delta_weight_t(const BSDFContext& ctx, const SurfaceInteraction<T>& si, const Vec3<T>& wo) const {
+        const T w = weight(si);
+        return bsdf_[0]->delta_weight(ctx, si, wo) * (T(1) - w) + bsdf_[1]->delta_weight(ctx, si, wo) * w;
+    }
     std::pair<BSDFSample, Color3f> sample(const BSDFContext& ctx, const SurfaceInteraction3f& si, float u1,
                                           const Vec2f& u2) const override {
         const float w = weight(si);

@@ -19,6 +19,12 @@ public:
         return Color3<T>(T(0));
     }
     template <typename T> T pdf_t(const BSDFContext&, const SurfaceInteraction<T>&, const Vec3<T>&) const { return T(0); }
+    // g = specular_reflectance F(cos_i) (the mirror lobe; paper 003 Eq. 19 with D the delta).
+    template <typename T>
+    Color3<T> delta_weight_t(const BSDFContext&, const SurfaceInteraction<T>& si, const Vec3<T>& wo) const {
+        if (!(si.wi.z > T(0) && wo.z > T(0))) return Color3<T>(T(0));
+        return specular_->eval(si) * fresnel_conductor(si.wi.z, eta_->eval(si), k_->eval(si));
+    }
     // wo = mirror(wi), weight = specular_reflectance * F(cos_i).
     std::pair<BSDFSample, Color3f> sample(const BSDFContext&, const SurfaceInteraction3f& si, float,
                                           const Vec2f&) const override {

@@ -21,6 +21,14 @@ public:
         return Color3<T>(T(0));
     }
     template <typename T> T pdf_t(const BSDFContext&, const SurfaceInteraction<T>&, const Vec3<T>&) const { return T(0); }
+    // g = F R for the mirror lobe, (1 - F) T eta_ti^2 (radiance) for the refracted one.
+    template <typename T>
+    Color3<T> delta_weight_t(const BSDFContext& ctx, const SurfaceInteraction<T>& si, const Vec3<T>& wo) const {
+        const auto fr = fresnel_dielectric(si.wi.z, eta_);
+        if (si.wi.z * wo.z > T(0)) return reflectance_->eval(si) * fr.F;
+        const T scale = ctx.mode == TransportMode::Radiance ? fr.eta_ti * fr.eta_ti : T(1);
+        return transmittance_->eval(si) * ((T(1) - fr.F) * scale);
+    }
 
     std::pair<BSDFSample, Color3f> sample(const BSDFContext& ctx, const SurfaceInteraction3f& si, float u1,
                                           const Vec2f&) const override {

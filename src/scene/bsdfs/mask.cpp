@@ -19,6 +19,14 @@ public:
     template <typename T> T pdf_t(const BSDFContext& ctx, const SurfaceInteraction<T>& si, const Vec3<T>& wo) const {
         return nested_->pdf(ctx, si, wo) * opacity(si);
     }
+    // The nested BSDF's delta lobes scaled by the opacity, and the pass-through (wo = -wi) by 1 - opacity.
+    template <typename T>
+    Color3<T> delta_weight_t(const BSDFContext& ctx, const SurfaceInteraction<T>& si, const Vec3<T>& wo) const {
+        const T a = opacity(si);
+        Color3<T> g = nested_->delta_weight(ctx, si, wo) * a;
+        if (dot(wo, -si.wi) > T(1.f - 1e-5f)) g = g + Color3<T>(T(1) - a);
+        return g;
+    }
     std::pair<BSDFSample, Color3f> sample(const BSDFContext& ctx, const SurfaceInteraction3f& si, float u1,
                                           const Vec2f& u2) const override {
         const float a = opacity(si), null_prob = 1.f - a;

@@ -12,6 +12,10 @@ public:
         return Color3<T>(T(0));
     }
     template <typename T> T pdf_t(const BSDFContext&, const SurfaceInteraction<T>&, const Vec3<T>&) const { return T(0); }
+    template <typename T>
+    Color3<T> delta_weight_t(const BSDFContext&, const SurfaceInteraction<T>& si, const Vec3<T>& wo) const {
+        return Color3<T>(si.wi.z * wo.z < T(0) ? T(1) : T(0));
+    }
     std::pair<BSDFSample, Color3f> sample(const BSDFContext&, const SurfaceInteraction3f& si, float,
                                           const Vec2f&) const override {
         BSDFSample bs;

@@ -38,6 +38,13 @@ template <typename Derived> class PerturbedFrameBSDF : public BSDFBase<Derived> 
         if (!(wo.z * wo_p.z > T(0))) return T(0);
         return nested_->pdf(ctx, perturbed(si, f), wo_p);
     }
+    template <typename T>
+    Color3<T> delta_weight_t(const BSDFContext& ctx, const SurfaceInteraction<T>& si, const Vec3<T>& wo) const {
+        const Frame<T> f = derived().template frame<T>(si);
+        const Vec3<T> wo_p = f.to_local(wo);
+        if (!(wo.z * wo_p.z > T(0))) return Color3<T>(T(0));
+        return nested_->delta_weight(ctx, perturbed(si, f), wo_p);
+    }
     std::pair<BSDFSample, Color3f> sample(const BSDFContext& ctx, const SurfaceInteraction3f& si, float u1,
                                           const Vec2f& u2) const override {
         const Frame3f f = derived().template frame<float>(si);

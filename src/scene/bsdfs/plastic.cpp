@@ -37,6 +37,12 @@ public:
         const T fi = fresnel_dielectric(si.wi.z, eta_).F;
         return (T(1) - prob_specular(fi)) * warp::square_to_cosine_hemisphere_pdf(wo);
     }
+    // The coating's mirror lobe: g = specular_reflectance F(cos_i).
+    template <typename T>
+    Color3<T> delta_weight_t(const BSDFContext&, const SurfaceInteraction<T>& si, const Vec3<T>& wo) const {
+        if (!(si.wi.z > T(0) && wo.z > T(0))) return Color3<T>(T(0));
+        return specular_->eval(si) * fresnel_dielectric(si.wi.z, eta_).F;
+    }
     std::pair<BSDFSample, Color3f> sample(const BSDFContext& ctx, const SurfaceInteraction3f& si, float u1,
                                           const Vec2f& u2) const override {
         BSDFSample bs;

@@ -21,6 +21,17 @@ public:
         return Color3<T>(T(0));
     }
     template <typename T> T pdf_t(const BSDFContext&, const SurfaceInteraction<T>&, const Vec3<T>&) const { return T(0); }
+    // g = R' reflectance for the mirror lobe, (1 - R') transmittance through the slab (R' with the internal
+    // bounces, as sample()).
+    template <typename T>
+    Color3<T> delta_weight_t(const BSDFContext&, const SurfaceInteraction<T>& si, const Vec3<T>& wo) const {
+        using std::abs;
+        T R = fresnel_dielectric(abs(si.wi.z), eta_).F;
+        const T t = T(1) - R;
+        if (R < T(1)) R = R + t * t * R / (T(1) - R * R);
+        if (si.wi.z * wo.z > T(0)) return reflectance_->eval(si) * R;
+        return transmittance_->eval(si) * (T(1) - R);
+    }
 
     std::pair<BSDFSample, Color3f> sample(const BSDFContext&, const SurfaceInteraction3f& si, float u1,
                                           const Vec2f&) const override {

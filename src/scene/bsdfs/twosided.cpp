@@ -22,6 +22,11 @@ public:
         const SurfaceInteraction<T> si_back = mirrored(si);
         return back_->pdf(ctx, si_back, Vec3<T>(wo.x, wo.y, -wo.z));
     }
+    template <typename T>
+    Color3<T> delta_weight_t(const BSDFContext& ctx, const SurfaceInteraction<T>& si, const Vec3<T>& wo) const {
+        if (si.wi.z > T(0)) return front_->delta_weight(ctx, si, wo);
+        return back_->delta_weight(ctx, mirrored(si), Vec3<T>(wo.x, wo.y, -wo.z));
+    }
     std::pair<BSDFSample, Color3f> sample(const BSDFContext& ctx, const SurfaceInteraction3f& si, float u1,
                                           const Vec2f& u2) const override {
         if (si.wi.z > 0.f) return front_->sample(ctx, si, u1, u2);
