@@ -39,10 +39,8 @@ MeasuredVertex<Var> first_vertex(const MaterialForm& form, const PathVertex& v, 
     x.ref = &v;
     factor = Var(1.f);
     if (v.infinite) {
-        x.infinite = true;
-        x.p = o + Vec3<Var>(ray.d);
         if (!image) factor = Var(escaped_weight);
-        return x;
+        return escaped_vertex(v, o, ray.d);
     }
     if (!image) {
         x = measured_vertex<Var>(v, form);
@@ -138,11 +136,7 @@ Color3<Var> bidirectional_camera_path(const Scene& scene, const MaterialForm& fo
     for (size_t k = 2; k < camera_path.size(); ++k) {
         const PathVertex& v = camera_path[k];
         if (v.infinite) {
-            MeasuredVertex<Var> x;
-            x.ref = &v;
-            x.infinite = true;
-            x.p = z.back().p + Vec3<Var>(v.d_env);
-            z.push_back(x);
+            z.push_back(escaped_vertex(v, z.back().p, v.d_env));
         } else {
             z.push_back(measured_vertex<Var>(v, form));
         }

@@ -28,29 +28,11 @@ EpsmPath evaluate(const Parameters& params, const std::vector<EpsmVertex>& verti
             continue;
         }
         // A point moves with the translations of its sensor or light (rotations turn it about itself).
-        Vec3<Var> x(v.p);
-        const std::vector<Motion>* motions = v.kind == EpsmVertex::Kind::Camera ? &params.sensor_motions()
-                                             : v.emitter                        ? &params.emitter_motions(v.emitter)
-                                                                                : nullptr;
-        if (motions)
-            for (const Motion& m : *motions)
-                if (m.kind == Parameter::Kind::Translate) x += Vec3<Var>(m.vector) * Var::parameter(0.f, m.index);
-        out.x[i] = x;
+        out.x[i] = v.kind == EpsmVertex::Kind::Camera ? camera_position(params, v.p)
+                   : v.emitter                        ? light_position(params, *v.emitter, v.p)
+                                                      : Vec3<Var>(v.p);
     }
     return out;
-}
-
-// A direction in a frame that is fixed in the world, turned by the camera's rotations for the eye (the
-// inverse rotation to first order, as MaterialForm::direction_to_reference_camera).
-Vec3<Var> to_point_frame(const Parameters& params, const EpsmVertex& v, const Vec3<Var>& d) {
-    Vec3<Var> y = d;
-    if (v.kind == EpsmVertex::Kind::Camera)
-        for (const Motion& m : params.sensor_motions())
-            if (m.kind == Parameter::Kind::Rotate) {
-                const Vec3f d0(d.x.v, d.y.v, d.z.v);
-                y -= Vec3<Var>(cross(m.vector, d0)) * Var::parameter(0.f, m.index);
-            }
-    return y;
 }
 
 // C_k(X, θ): the two components of constraint k (Eqs. 3–5, 24).
@@ -64,7 +46,9 @@ Vec2<Var> constraint_value(const Parameters& params, const std::vector<EpsmVerte
             return Vec2<Var>(dot(w, f.s), dot(w, f.t));
         }
         // A point's frame: fixed in the world, built around the reference direction.
-        const Vec3<Var> y = to_point_frame(params, vertices[size_t(c.vertex)], w);
+        // (For the eye, in the moving camera's frame.)
+        const Vec3<Var> y =
+            vertices[size_t(c.vertex)].kind == EpsmVertex::Kind::Camera ? direction_to_reference_camera(params, w) : w;
         const Frame3f f(normalize(Vec3f(w.x.v, w.y.v, w.z.v)));
         return Vec2<Var>(dot(y, Vec3<Var>(f.s)), dot(y, Vec3<Var>(f.t)));
     };

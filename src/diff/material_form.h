@@ -82,6 +82,31 @@ private:
 };
 
 // X(·, θ) for every shape and the camera.
+// Motions of the camera and of point-like lights, which depend on the enabled parameters only (MaterialForm and
+// diff/epsm.h use them).
+// The camera's center of projection as it moves.
+inline Vec3<Var> camera_position(const Parameters& params, const Vec3f& camera) {
+    Vec3<Var> y(camera);
+    for (const Motion& m : params.sensor_motions())
+        if (m.kind == Parameter::Kind::Translate) y += Vec3<Var>(m.vector) * Var::parameter(0.f, m.index);
+    return y;
+}
+// A direction turned into the moving camera's reference frame (its rotations inverted, to first order).
+inline Vec3<Var> direction_to_reference_camera(const Parameters& params, const Vec3<Var>& d) {
+    Vec3<Var> y = d;
+    for (const Motion& m : params.sensor_motions())
+        if (m.kind == Parameter::Kind::Rotate)
+            y -= Vec3<Var>(cross(m.vector, Vec3f(d.x.v, d.y.v, d.z.v))) * Var::parameter(0.f, m.index);
+    return y;
+}
+// A point-like light's position as it moves.
+inline Vec3<Var> light_position(const Parameters& params, const Emitter& e, const Vec3f& x_e) {
+    Vec3<Var> y(x_e);
+    for (const Motion& m : params.emitter_motions(&e))
+        if (m.kind == Parameter::Kind::Translate) y += Vec3<Var>(m.vector) * Var::parameter(0.f, m.index);
+    return y;
+}
+
 class MaterialForm {
 public:
     MaterialForm(const Scene& scene, const Parameters& params, FirstVertex first_vertex)
@@ -118,12 +143,7 @@ public:
     }
     const VolumeMotion& volume_motion() const { return volume_motion_; }
     // The camera's center of projection as it moves.
-    Vec3<Var> camera_position(const Vec3f& camera) const {
-        Vec3<Var> y(camera);
-        for (const Motion& m : params_.sensor_motions())
-            if (m.kind == Parameter::Kind::Translate) y += Vec3<Var>(m.vector) * Var::parameter(0.f, m.index);
-        return y;
-    }
+    Vec3<Var> camera_position(const Vec3f& camera) const { return penumbra::camera_position(params_, camera); }
     // J(p) = |(x1 - x0) × (x2 - x0)| / |(p1 - p0) × (p2 - p0)| for the triangle of `hit` (exact: X is affine on it).
     Var jacobian(const SurfaceInteraction3f& hit) const {
         const MovedVertices moved = vertices(*hit.shape);
@@ -145,11 +165,7 @@ public:
     }
     // Directions rotate with the camera too (normals used by the film Jacobian).
     Vec3<Var> direction_to_reference_camera(const Vec3<Var>& d) const {
-        Vec3<Var> y = d;
-        for (const Motion& m : params_.sensor_motions())
-            if (m.kind == Parameter::Kind::Rotate)
-                y -= Vec3<Var>(cross(m.vector, Vec3f(d.x.v, d.y.v, d.z.v))) * Var::parameter(0.f, m.index);
-        return y;
+        return penumbra::direction_to_reference_camera(params_, d);
     }
 
     // The inverse: a direction in the reference camera's frame back to the world (the camera's rotation applied).
@@ -164,10 +180,7 @@ public:
     // A moving light (first order at θ = 0): its position x_e + θ d (rotations are about x_e), and a
     // direction it emits along or arrives from, R(a, θ) d.
     Vec3<Var> light_position(const Emitter& e, const Vec3f& x_e) const {
-        Vec3<Var> y(x_e);
-        for (const Motion& m : params_.emitter_motions(&e))
-            if (m.kind == Parameter::Kind::Translate) y += Vec3<Var>(m.vector) * Var::parameter(0.f, m.index);
-        return y;
+        return penumbra::light_position(params_, e, x_e);
     }
     Vec3<Var> light_direction(const Emitter& e, const Vec3f& d) const {
         Vec3<Var> y(d);

@@ -30,6 +30,16 @@ template <typename T> struct MeasuredVertex {
     bool surface = false, infinite = false;
 };
 
+// An escaped camera ray's vertex (the environment): a point one unit along the world direction d from the
+// vertex before it, which only the direction it gives matters for.
+template <typename T> MeasuredVertex<T> escaped_vertex(const PathVertex& v, const Vec3<T>& before, const Vec3f& d) {
+    MeasuredVertex<T> x;
+    x.ref = &v;
+    x.infinite = true;
+    x.p = before + Vec3<T>(d);
+    return x;
+}
+
 // A scattering vertex or an area light's point of the reference path on the geometry.
 template <typename T, typename Geometry>
 MeasuredVertex<T> measured_vertex(const PathVertex& v, const Geometry& geometry) {

@@ -151,11 +151,7 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng,
         const PathVertex& v = camera_path[k];
         z_material.push_back(Vec3<Var>());
         if (v.infinite) {
-            MeasuredVertex<Var> x;
-            x.ref = &v;
-            x.infinite = true;
-            x.p = z.back().p + Vec3<Var>(v.d_env);
-            z.push_back(x);
+            z.push_back(escaped_vertex(v, z.back().p, v.d_env));
             continue;
         }
         const WarNeighbor previous{camera_path[k - 1].si, z_material[k - 1]};
