@@ -108,7 +108,8 @@ MethodGradient DerivativeMethod::loss_gradient(const Scene& scene, const Paramet
 const std::vector<MethodInfo>& derivative_methods() {
     static const std::vector<MethodInfo> methods = {psdr_method_info(), interior_method_info(),
                                                     paths_method_info(), was_method_info(),
-                                                    war_method_info(), war_bdpt_method_info()};
+                                                    war_method_info(), war_bdpt_method_info(),
+                                                    dpm_c_method_info(), dpm_g_method_info()};
     return methods;
 }
 

@@ -115,5 +115,7 @@ MethodInfo paths_method_info();
 MethodInfo was_method_info();
 MethodInfo war_method_info();
 MethodInfo war_bdpt_method_info();
+MethodInfo dpm_c_method_info();
+MethodInfo dpm_g_method_info();
 
 } // namespace penumbra

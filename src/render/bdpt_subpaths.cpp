@@ -156,6 +156,7 @@ void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, 
                 eta *= bs.eta;
             if (bs.sampled_type & BSDFDelta) {
                 cur.delta = true;
+                cur.eta = bs.eta;
                 pdf_dir = 0.f;
             } else {
                 pdf_dir = bs.pdf;

@@ -29,6 +29,7 @@ struct PathVertex {
     // pdf_fwd) and in the reverse one (part of the previous vertex's pdf_rev); 1 in vacuum.
     float ff_fwd = 1.f, ff_rev = 1.f;
     bool delta = false;    // scattered by a delta BSDF lobe (no connection can use this vertex)
+    float eta = 1.f;       // delta vertices: the relative index η_out / η_in along the sampled lobe (1: reflection)
     bool infinite = false; // an escaped camera ray (the environment) or an infinite light's endpoint
 
     // Densities toward this vertex carry the |cos| of its normal (surfaces and area-light endpoints).

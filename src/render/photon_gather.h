@@ -19,11 +19,12 @@ struct PhotonGather {
 
 // Photons are merged with the visible point when the full path fits in max_depth (eye + photon segments)
 // and they lie on a surface facing the same way (normals within 60°: no flux from a wall's other side or
-// the other face of a corner). f / |cos_g|: BSDF::eval() returns f |cos θ| in the shading frame, while the
-// photons' density is per unit of geometric area (the shading-normal correction of adjoint transport).
-inline PhotonGather gather_photons(const PhotonMap& map, const VisiblePoint& vp, float radius,
-                                   PhotonKernel kernel, int max_depth) {
-    PhotonGather g;
+// the other face of a corner). Calls visit(photon, K(d / r), f / |cos_g|) for each: BSDF::eval() returns
+// f |cos θ| in the shading frame, while the photons' density is per unit of geometric area (the
+// shading-normal correction of adjoint transport).
+template <typename Visit>
+void for_each_merged_photon(const PhotonMap& map, const VisiblePoint& vp, float radius, PhotonKernel kernel,
+                            int max_depth, Visit&& visit) {
     const BSDF* bsdf = vp.si.bsdf();
     const BSDFContext ctx{TransportMode::Radiance};
     const float inv_radius = 1.f / radius;
@@ -34,7 +35,14 @@ inline PhotonGather gather_photons(const PhotonMap& map, const VisiblePoint& vp,
         if (!(cos_g > 0.f)) return;
         const float k = photon_kernel(kernel, std::sqrt(d2) * inv_radius);
         if (!(k > 0.f)) return;
-        const Color3f f = bsdf->eval(ctx, vp.si, vp.si.to_local(ph.wi)) / cos_g;
+        visit(ph, k, bsdf->eval(ctx, vp.si, vp.si.to_local(ph.wi)) / cos_g);
+    });
+}
+
+inline PhotonGather gather_photons(const PhotonMap& map, const VisiblePoint& vp, float radius,
+                                   PhotonKernel kernel, int max_depth) {
+    PhotonGather g;
+    for_each_merged_photon(map, vp, radius, kernel, max_depth, [&](const Photon& ph, float k, const Color3f& f) {
         g.count += k;
         g.flux += f * ph.flux * k;
     });

@@ -2,6 +2,8 @@
 // point, spot, projector, directional, environment) by bidirectional path tracing's light walk
 // (render/bdpt_subpaths.h), each surface vertex with a non-delta BSDF kept as a photon.
 #pragma once
+#include "render/integrator.h"
+#include "render/path_vertex.h"
 #include "render/photon_map.h"
 #include "scene/scene.h"
 
@@ -26,5 +28,10 @@ struct PhotonTracingStats {
 // photons are listed by subpath index, then depth, so they are the same whatever the thread count.
 std::vector<Photon> trace_photons(const Scene& scene, const PhotonTracingSettings& settings, uint64_t seed,
                                   uint64_t pass, PhotonTracingStats& stats);
+
+// Light subpath `index` of pass `pass` again, vertex for vertex as trace_photons() traced it (its photons are
+// path[photon.depth]): the differentiable estimators re-trace the few paths they differentiate.
+void trace_photon_path(const Scene& scene, const PhotonTracingSettings& settings, uint64_t seed, uint64_t pass,
+                       uint32_t index, std::vector<PathVertex>& path, RayCounter& rays);
 
 } // namespace penumbra

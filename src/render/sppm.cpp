@@ -34,33 +34,41 @@
 namespace penumbra {
 
 SPPMIntegrator::SPPMIntegrator(const Properties& props) {
-    photon_count_ = props.get_int("photon_count", 250000);
-    initial_radius_ = props.get_float("initial_radius", 0.f);
-    alpha_ = props.get_float("alpha", 0.7f);
-    max_depth_ = int(props.get_int("max_depth", -1));
-    rr_depth_ = int(props.get_int("rr_depth", 5));
-    granularity_ = props.get_int("granularity", 0);
-    max_passes_ = props.get_int("max_passes", -1);
+    s_.photon_count = props.get_int("photon_count", 250000);
+    s_.initial_radius = props.get_float("initial_radius", 0.f);
+    s_.alpha = props.get_float("alpha", 0.7f);
+    s_.max_depth = int(props.get_int("max_depth", -1));
+    s_.rr_depth = int(props.get_int("rr_depth", 5));
+    s_.granularity = props.get_int("granularity", 0);
+    s_.max_passes = props.get_int("max_passes", -1);
     const std::string kernel = props.get_string("kernel", "constant");
     if (kernel == "constant")
-        kernel_ = PhotonKernel::Constant;
+        s_.kernel = PhotonKernel::Constant;
     else if (kernel == "smooth")
-        kernel_ = PhotonKernel::Smooth;
+        s_.kernel = PhotonKernel::Smooth;
     else
         props.raise("kernel", "'kernel' must be 'constant' or 'smooth', got '" + kernel + "'");
-    if (photon_count_ <= 0 || photon_count_ > (int64_t(1) << 31))
+    if (s_.photon_count <= 0 || s_.photon_count > (int64_t(1) << 31))
         props.raise("photon_count",
-                    "'photon_count' must be positive (at most 2^31), got " + std::to_string(photon_count_));
-    if (!(initial_radius_ >= 0.f) || !std::isfinite(initial_radius_))
+                    "'photon_count' must be positive (at most 2^31), got " + std::to_string(s_.photon_count));
+    if (!(s_.initial_radius >= 0.f) || !std::isfinite(s_.initial_radius))
         props.raise("initial_radius",
-                    "'initial_radius' must be >= 0 (0: automatic), got " + std::to_string(initial_radius_));
-    if (!(alpha_ > 0.f && alpha_ <= 1.f))
-        props.raise("alpha", "'alpha' must be in (0, 1], got " + std::to_string(alpha_));
-    if (max_depth_ < -1) props.raise("max_depth", "'max_depth' must be -1 (infinite) or non-negative");
-    if (rr_depth_ <= 0) props.raise("rr_depth", "'rr_depth' must be positive");
-    if (granularity_ < 0) props.raise("granularity", "'granularity' must be >= 0 (0: automatic)");
-    if (max_passes_ == 0 || max_passes_ < -1)
+                    "'initial_radius' must be >= 0 (0: automatic), got " + std::to_string(s_.initial_radius));
+    if (!(s_.alpha > 0.f && s_.alpha <= 1.f))
+        props.raise("alpha", "'alpha' must be in (0, 1], got " + std::to_string(s_.alpha));
+    if (s_.max_depth < -1) props.raise("max_depth", "'max_depth' must be -1 (infinite) or non-negative");
+    if (s_.rr_depth <= 0) props.raise("rr_depth", "'rr_depth' must be positive");
+    if (s_.granularity < 0) props.raise("granularity", "'granularity' must be >= 0 (0: automatic)");
+    if (s_.max_passes == 0 || s_.max_passes < -1)
         props.raise("max_passes", "'max_passes' must be positive or -1 (the sampler's sample count)");
+}
+
+float sppm_radius(const Scene& scene, const SPPMSettings& settings) {
+    if (settings.initial_radius > 0.f) return settings.initial_radius;
+    const Film& film = *scene.sensor->film;
+    const float r = 5.f * scene.bounding_sphere().radius / float(std::max(film.width, film.height));
+    if (!(r > 0.f)) throw Error("sppm: the automatic initial radius is 0 (an empty scene?)");
+    return r;
 }
 
 std::vector<Layer> SPPMIntegrator::render(const Scene& scene, const RenderOptions& options,
@@ -71,23 +79,20 @@ std::vector<Layer> SPPMIntegrator::render(const Scene& scene, const RenderOption
     const Film& film = *sensor.film;
     const int width = film.width, height = film.height;
     const uint64_t passes = options.spp > 0   ? uint64_t(options.spp)
-                            : max_passes_ > 0 ? uint64_t(max_passes_)
+                            : s_.max_passes > 0 ? uint64_t(s_.max_passes)
                                               : uint64_t(sensor.sampler->sample_count);
-    const float r0 = initial_radius_ > 0.f
-                         ? initial_radius_
-                         : 5.f * scene.bounding_sphere().radius / float(std::max(width, height));
-    if (!(r0 > 0.f)) throw Error("sppm: the automatic initial radius is 0 (an empty scene?)");
+    const float r0 = sppm_radius(scene, s_);
 
     std::vector<SPPMPixel> pixels(size_t(width) * height);
     for (SPPMPixel& px : pixels)
         px.radius = r0;
     std::vector<VisiblePoint> points(pixels.size());
-    const EyeSubpathSettings eye{max_depth_, rr_depth_};
+    const EyeSubpathSettings eye{s_.max_depth, s_.rr_depth};
     PhotonTracingSettings light;
-    light.paths = uint64_t(photon_count_);
-    light.max_depth = max_depth_;
-    light.rr_depth = rr_depth_;
-    light.granularity = uint64_t(granularity_);
+    light.paths = uint64_t(s_.photon_count);
+    light.max_depth = s_.max_depth;
+    light.rr_depth = s_.rr_depth;
+    light.granularity = uint64_t(s_.granularity);
     light.threads = options.threads;
     std::atomic<uint64_t> rays{0}, dropped{0};
     PhotonMap map;
@@ -139,9 +144,9 @@ std::vector<Layer> SPPMIntegrator::render(const Scene& scene, const RenderOption
                         if (!points[pixel].valid()) continue;
                         SPPMPixel& px = pixels[pixel];
                         const PhotonGather g =
-                            gather_photons(map, points[pixel], px.radius, kernel_, max_depth_);
+                            gather_photons(map, points[pixel], px.radius, s_.kernel, s_.max_depth);
                         if (!(g.count > 0.f)) continue;
-                        const float n_new = px.count + alpha_ * g.count;
+                        const float n_new = px.count + s_.alpha * g.count;
                         const float ratio = n_new / (px.count + g.count);
                         px.tau = (px.tau + g.flux) * ratio;
                         px.radius *= std::sqrt(ratio);
@@ -154,7 +159,7 @@ std::vector<Layer> SPPMIntegrator::render(const Scene& scene, const RenderOption
 
     // L = L_e / passes + τ / (π R² N_emitted), N_emitted = passes × photon_count.
     Image image(width, height);
-    const double emitted = double(passes) * double(photon_count_);
+    const double emitted = double(passes) * double(s_.photon_count);
     for (size_t i = 0; i < pixels.size(); ++i) {
         const SPPMPixel& px = pixels[i];
         image.pixels[i] = px.emission / float(passes) +

@@ -6,7 +6,9 @@
 namespace penumbra {
 
 VisiblePoint trace_visible_point(const Scene& scene, Sampler& sampler, Ray ray, Color3f beta,
-                                 const EyeSubpathSettings& settings, Color3f& emission, RayCounter& rays) {
+                                 const EyeSubpathSettings& settings, Color3f& emission, RayCounter& rays,
+                                 std::vector<SpecularVertex>* chain) {
+    if (chain) chain->clear();
     const BSDFContext ctx{TransportMode::Radiance};
     const int max_depth = settings.max_depth < 0 ? std::numeric_limits<int>::max() : settings.max_depth;
     float eta = 1.f;
@@ -33,6 +35,7 @@ VisiblePoint trace_visible_point(const Scene& scene, Sampler& sampler, Ray ray, 
         eta *= bs.eta;
         ray = si.spawn_ray(si.to_world(bs.wo));
         if (bs.sampled_type == BSDFNull) continue;
+        if (chain) chain->push_back({si, bs.eta});
         ++depth;
         // Russian roulette along long specular chains (Mitsuba 3's survival probability).
         if (depth > settings.rr_depth) {

@@ -14,6 +14,13 @@ struct VisiblePoint {
     bool valid() const { return si.is_valid(); }
 };
 
+// A specular vertex of the eye subpath: where it was scattered, and the relative index η_out / η_in of the
+// sampled delta lobe (1: reflection), for the half-vector constraints of differentiable photon mapping.
+struct SpecularVertex {
+    SurfaceInteraction3f si;
+    float eta = 1.f;
+};
+
 struct EyeSubpathSettings {
     int max_depth = -1; // longest full path in segments (-1: unlimited)
     int rr_depth = 5;   // eye depth at which Russian roulette starts along specular chains
@@ -22,8 +29,10 @@ struct EyeSubpathSettings {
 // Traces `ray` (whose sample weight is `beta`); adds the emission it reaches to `emission`. A BSDF with
 // both delta and non-delta lobes (plastic, masks) is a visible point with probability 1/2 (weight 2, its
 // non-delta lobes only), else continues along a sampled delta lobe (weight 2; a sampled non-delta lobe
-// ends the subpath): an unbiased split of the two parts.
+// ends the subpath): an unbiased split of the two parts. `chain` (optional) receives the specular vertices
+// between the camera and the visible point (null crossings are not vertices).
 VisiblePoint trace_visible_point(const Scene& scene, Sampler& sampler, Ray ray, Color3f beta,
-                                 const EyeSubpathSettings& settings, Color3f& emission, RayCounter& rays);
+                                 const EyeSubpathSettings& settings, Color3f& emission, RayCounter& rays,
+                                 std::vector<SpecularVertex>* chain = nullptr);
 
 } // namespace penumbra

@@ -1,0 +1,211 @@
+#include "diff/dpm.h"
+
+#include "core/batch_stats.h"
+#include "core/interrupt.h"
+#include "diff/photon_path.h"
+#include "diff/pixel_driver.h"
+#include "render/light_medium.h"
+#include "render/photon_gather.h"
+#include "render/photon_tracing.h"
+#include "render/sppm.h"
+#include "render/tiles.h"
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include <chrono>
+
+namespace penumbra {
+
+namespace {
+
+// The scene's `sppm` settings (its defaults with the smooth kernel without one).
+SPPMSettings photon_mapping_settings(const Scene& scene) {
+    if (const auto* sppm = dynamic_cast<const SPPMIntegrator*>(scene.integrator.get())) return sppm->settings();
+    SPPMSettings s;
+    s.kernel = PhotonKernel::Smooth;
+    return s;
+}
+
+void check_options(const Scene& scene, const Parameters& params, const DpmOptions& o) {
+    require_film(scene, params);
+    if (scene_has_media(scene))
+        throw Error("dpm: participating media are not supported by photon mapping (differentiate with psdr)");
+    if (o.spp <= 0 || o.batches <= 0) throw Error("dpm: spp and batches must be positive");
+    if (!(o.pixel_fraction > 0.0 && o.pixel_fraction <= 1.0))
+        throw Error("dpm: the pixel fraction must be in (0, 1]");
+    if (o.paths <= 0) throw Error("dpm: the paths per pixel must be positive");
+}
+
+// One differentiated path: its pixel and contribution on the tape (the estimate's scale included).
+struct PathSample {
+    uint64_t pixel;
+    Color3<Var> value;
+};
+
+// The passes [first, first + count) of the estimator: calls primal(pixel, L) with each pixel's SPPM estimate
+// of each pass, and, on the thread that traced it with its tape current, sample(s) for each differentiated path.
+template <typename Primal, typename Sample>
+void for_each_path(const Scene& scene, const Parameters& params, const DpmOptions& o, uint64_t first,
+                   uint64_t count, const std::function<void(float)>& progress, Primal&& primal, Sample&& sample) {
+    const Sensor& sensor = *scene.sensor;
+    const Film& film = *sensor.film;
+    const SPPMSettings s = photon_mapping_settings(scene);
+    const float radius = sppm_radius(scene, s);
+    const EyeSubpathSettings eye{s.max_depth, s.rr_depth};
+    PhotonTracingSettings light;
+    light.paths = uint64_t(s.photon_count);
+    light.max_depth = s.max_depth;
+    light.rr_depth = s.rr_depth;
+    light.granularity = uint64_t(s.granularity);
+    light.threads = o.threads;
+    // L = Σ_p K f Φ_p / (π r² N) per pass (render/sppm.cpp at a fixed radius).
+    const float norm = float(1.0 / (Pi * double(radius) * radius * double(s.photon_count)));
+    const std::vector<PhotonPathEpsm> epsms =
+        o.variant == DpmVariant::C ? std::vector<PhotonPathEpsm>{PhotonPathEpsm::FixedEyeRay}
+                                   : std::vector<PhotonPathEpsm>{PhotonPathEpsm::FixedDensity,
+                                                                 PhotonPathEpsm::VertexMerge};
+    PhotonMap map;
+    for (uint64_t k = 0; k < count; ++k) {
+        const uint64_t pass = first + k;
+        PhotonTracingStats stats;
+        map.build(trace_photons(scene, light, o.seed, pass, stats), radius);
+        for_each_tile(film.width, film.height, o.threads, [&](int x0, int y0, int x1, int y1) {
+            Sampler sampler(*sensor.sampler, int(std::min<uint64_t>(first + count, kMaxSampleCount)));
+            Sampler choice;
+            RayCounter rays;
+            std::vector<SpecularVertex> chain;
+            std::vector<PathVertex> light_path;
+            std::vector<std::pair<const Photon*, Color3f>> merged;
+            Tape& tape = Tape::current();
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    check_interrupt();
+                    const uint64_t pixel = uint64_t(y) * film.width + x;
+                    sampler.start(o.seed, pixel, pass);
+                    const Vec2f pos = film.sample_position(x, y, sampler.next_2d());
+                    const auto [ray, weight] = sensor.sample_ray(pos, sampler.next_2d());
+                    Color3f emission(0.f);
+                    const VisiblePoint vp =
+                        trace_visible_point(scene, sampler, ray, weight, eye, emission, rays, &chain);
+                    if (!vp.valid() || !is_finite(vp.beta)) {
+                        if (is_finite(emission)) primal(pixel, emission);
+                        continue;
+                    }
+                    merged.clear();
+                    Color3f sum(0.f);
+                    float total = 0.f;
+                    for_each_merged_photon(map, vp, radius, s.kernel, s.max_depth,
+                                           [&](const Photon& ph, float kernel, const Color3f& f) {
+                                               const Color3f c = f * ph.flux * vp.beta * (kernel * norm);
+                                               if (!is_finite(c)) return;
+                                               merged.push_back({&ph, c});
+                                               sum += c;
+                                               total += luminance(c);
+                                           });
+                    primal(pixel, emission + sum);
+                    // The pixel differentiates with probability `pixel_fraction`, photons drawn ∝ luminance.
+                    choice.start(o.seed ^ 0xd1b54a32d192ed03ULL, pixel, pass);
+                    if (!(total > 0.f) || choice.next_1d() >= float(o.pixel_fraction)) continue;
+                    for (int n = 0; n < o.paths; ++n) {
+                        float u = choice.next_1d() * total;
+                        size_t i = 0;
+                        while (i + 1 < merged.size() && u >= luminance(merged[i].second))
+                            u -= luminance(merged[i++].second);
+                        const auto& [ph, c] = merged[i];
+                        const float prob = luminance(c) / total;
+                        if (!(prob > 0.f)) continue;
+                        trace_photon_path(scene, light, o.seed, pass, ph->path, light_path, rays);
+                        if (light_path.size() <= ph->depth) continue; // not re-traced identically
+                        const PhotonPath path{ray.o, &chain, &vp.si, &light_path, int(ph->depth), radius,
+                                              s.kernel};
+                        const float scale =
+                            1.f / (prob * float(o.pixel_fraction) * float(o.paths) * float(epsms.size()));
+                        for (const PhotonPathEpsm epsm : epsms) {
+                            tape.clear();
+                            PhotonPathValue v;
+                            if (!photon_path_value(params, path, epsm, v)) continue;
+                            const Color3<Var> value = v.ratio * Color3<Var>(c * scale);
+                            if (std::isfinite(value.x.v + value.y.v + value.z.v)) sample(PathSample{pixel, value});
+                        }
+                    }
+                }
+            tape.clear();
+        });
+        if (progress) progress(float(k + 1) / float(count));
+    }
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+} // namespace
+
+DerivativeImage dpm_derivative(const Scene& scene, const Parameters& params, const DpmOptions& o) {
+    const auto start = std::chrono::steady_clock::now();
+    check_options(scene, params, o);
+    const Film& film = *scene.sensor->film;
+    ImageBatches primal_batches, derivative_batches;
+    for (int b = 0; b < o.batches; ++b) {
+        Image primal(film.width, film.height), derivative(film.width, film.height);
+        const auto progress = o.progress ? std::function<void(float)>([&, b](float f) {
+            o.progress((float(b) + f) / float(o.batches));
+        })
+                                         : std::function<void(float)>();
+        tbb::enumerable_thread_specific<std::vector<float>> tangents;
+        const float inv = 1.f / float(o.spp);
+        // Pixels are disjoint within a pass's tiles: each pixel is written by one thread at a time.
+        for_each_path(
+            scene, params, o, uint64_t(b) * uint64_t(o.spp), uint64_t(o.spp), progress,
+            [&](uint64_t pixel, const Color3f& l) { primal.pixels[pixel] += l * inv; },
+            [&](const PathSample& s) {
+                std::vector<float>& tangent = tangents.local();
+                Tape::current().forward(params.direction().data(), tangent);
+                const Color3f d(tangent_of(s.value.x, tangent), tangent_of(s.value.y, tangent),
+                                tangent_of(s.value.z, tangent));
+                if (is_finite(d)) derivative.pixels[s.pixel] += d * inv;
+            });
+        primal_batches.add(primal);
+        derivative_batches.add(derivative);
+    }
+    DerivativeImage out;
+    out.primal = primal_batches.mean();
+    out.derivative = derivative_batches.mean();
+    out.stderr_img = derivative_batches.standard_error();
+    out.seconds = seconds_since(start);
+    return out;
+}
+
+Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const DpmOptions& o) {
+    const auto start = std::chrono::steady_clock::now();
+    check_options(scene, params, o);
+    const Film& film = *scene.sensor->film;
+    check_adjoint_size(film, adjoint);
+    const size_t dim = size_t(params.dimension());
+    struct Local {
+        std::vector<double> gradient;
+        std::vector<float> scratch;
+        std::vector<std::pair<int32_t, float>> seeds = std::vector<std::pair<int32_t, float>>(3);
+    };
+    tbb::enumerable_thread_specific<Local> locals([dim] { return Local{std::vector<double>(dim, 0.0), {}}; });
+    Gradient out{std::vector<double>(dim, 0.0), {}, Image(film.width, film.height), 0.0, {}};
+    const float inv = 1.f / float(o.spp);
+    for_each_path(
+        scene, params, o, 0, uint64_t(o.spp), o.progress,
+        [&](uint64_t pixel, const Color3f& l) { out.primal.pixels[pixel] += l * inv; },
+        [&](const PathSample& s) {
+            Local& local = locals.local();
+            const Color3f a = adjoint.pixels[s.pixel] * inv;
+            local.seeds[0] = {s.value.x.id, a.x};
+            local.seeds[1] = {s.value.y.id, a.y};
+            local.seeds[2] = {s.value.z.id, a.z};
+            Tape::current().backward(local.seeds, local.gradient.data(), local.scratch);
+        });
+    for (const Local& local : locals)
+        for (size_t k = 0; k < dim; ++k)
+            out.values[k] += local.gradient[k];
+    out.seconds = seconds_since(start);
+    return out;
+}
+
+} // namespace penumbra

@@ -1,0 +1,41 @@
+// Differentiable photon mapping (paper 003): derivatives of the SPPM image at a fixed merging radius, from
+// photon-mapping paths on extended path space manifolds (diff/photon_path.h).
+//
+// Each pass traces the SPPM eye subpath of every pixel to its visible point (render/visible_point.h, the same
+// random numbers as the `sppm` integrator) and photon_count light subpaths (render/photon_tracing.h); a
+// fraction of the pixels (paper §6: 1/16) then samples one of the photons merged at its visible point, with
+// probability proportional to its luminance contribution, re-traces that photon's light subpath and
+// differentiates the path's contribution (Eq. 23) on its EPSM:
+//   DPM-C (§5.2.1)  the fixed-eye-ray EPSM: contribution derivatives only, comparable with central finite
+//                   differences of SPPM renders at a fixed radius (`alpha` 1) with common random numbers;
+//   DPM-G (§5.2.2)  the average of the fixed-density and vertex-merging EPSMs, whose eye rays move: their
+//                   contribution derivatives, and the paths' screen-space motion (Eq. 7) for matching losses.
+// The estimate is d/dθ of the photon-mapped light; emission seen directly or through specular chains and
+// visibility discontinuities (boundary terms) are not differentiated. The radius is the scene's `sppm`
+// integrator's initial_radius (automatic for 0), its photon_count, kernel, max_depth and rr_depth are used
+// (without an `sppm` integrator: its defaults with the smooth kernel).
+#pragma once
+#include "diff/interior.h"
+
+namespace penumbra {
+
+enum class DpmVariant { C, G };
+
+struct DpmOptions {
+    DpmVariant variant = DpmVariant::C;
+    int spp = 16;    // SPPM passes (per batch)
+    int batches = 1; // forward mode: independent batches of passes
+    uint64_t seed = 0;
+    int threads = 0;
+    double pixel_fraction = 1.0 / 16.0; // pixels that differentiate a path in each pass
+    int paths = 1;                      // photon-mapping paths differentiated per sampled pixel
+    std::function<void(float)> progress;
+};
+
+// Forward mode: dI/dθ along params.direction() (the primal: SPPM at the fixed radius, same samples).
+DerivativeImage dpm_derivative(const Scene& scene, const Parameters& params, const DpmOptions& options);
+// Reverse mode: dL/dθ = Σ_pixels ∂L/∂I · dI/dθ for every enabled parameter.
+Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                      const DpmOptions& options);
+
+} // namespace penumbra
