@@ -86,7 +86,7 @@ DiffCheck run_case(const Case& c, DerivativeImage* out = nullptr) {
     o.pixel_fraction = 1.0;
     o.paths = 8;
     o.seed = 11 + 1000 * test_seed();
-    const DerivativeImage d = dpm_derivative(*scene, params, o);
+    const DerivativeImage d = dpm_derivative(*scene, params, o).image;
     RenderOptions ro;
     ro.spp = 4;
     ro.seed = 5 + 1000 * test_seed();
@@ -112,6 +112,84 @@ TEST(DpmC, GlassRotationMatchesFiniteDifferences) {
     EXPECT_TRUE(c.passes()) << describe(c);
 }
 
+// d/dθ of the caustic's centroid (channel 0, pixel centres) from DPM-G's screen-space motion and contribution
+// derivatives, dc/dθ = [Σ I dp/dθ + Σ dI/dθ (p − c)] / Σ I, against the centroid's central difference; with the
+// standard error of each (pixels independent).
+struct Centroid {
+    double dx, dy, se_x, se_y;
+};
+
+Centroid centroid_motion(const Image& primal, const Image& d, const Image& d_se, const Image* sx, const Image* sy,
+                         const Image* sx_se, const Image* sy_se) {
+    double total = 0, cx = 0, cy = 0;
+    for (int y = 0; y < primal.height; ++y)
+        for (int x = 0; x < primal.width; ++x) {
+            const double i = primal.at(x, y).x;
+            total += i;
+            cx += i * (x + 0.5);
+            cy += i * (y + 0.5);
+        }
+    cx /= total;
+    cy /= total;
+    Centroid c{0, 0, 0, 0};
+    for (int y = 0; y < primal.height; ++y)
+        for (int x = 0; x < primal.width; ++x) {
+            const double di = d.at(x, y).x, s = d_se.at(x, y).x, ux = x + 0.5 - cx, uy = y + 0.5 - cy;
+            c.dx += di * ux;
+            c.dy += di * uy;
+            double vx = s * ux, vy = s * uy;
+            if (sx) {
+                c.dx += sx->at(x, y).x;
+                c.dy += sy->at(x, y).x;
+                vx = std::hypot(vx, double(sx_se->at(x, y).x));
+                vy = std::hypot(vy, double(sy_se->at(x, y).x));
+            }
+            c.se_x += vx * vx;
+            c.se_y += vy * vy;
+        }
+    return {c.dx / total, c.dy / total, std::sqrt(c.se_x) / total, std::sqrt(c.se_y) / total};
+}
+
+class DpmG : public testing::TestWithParam<std::string> {};
+
+TEST_P(DpmG, ScreenSpaceMotionMatchesTheCentroidsFiniteDifference) {
+    auto scene = load_scene_string(scene_xml(mirror, above));
+    Parameters params(*scene);
+    params.enable({parse_param_selection(GetParam())});
+    DpmOptions o;
+    o.variant = DpmVariant::G;
+    o.spp = 4;
+    o.batches = 16;
+    o.pixel_fraction = 1.0;
+    o.paths = 8;
+    o.seed = 11 + 1000 * test_seed();
+    const DpmDerivative g = dpm_derivative(*scene, params, o);
+    RenderOptions ro;
+    ro.spp = 4;
+    ro.seed = 5 + 1000 * test_seed();
+    const FiniteDifference fd = finite_difference(*scene, params, 0.01, ro, 16);
+    const Centroid test = centroid_motion(g.image.primal, g.image.derivative, g.image.stderr_img, &g.screen_x,
+                                          &g.screen_y, &g.screen_x_stderr, &g.screen_y_stderr);
+    const Centroid ref =
+        centroid_motion(g.image.primal, fd.derivative, fd.stderr_img, nullptr, nullptr, nullptr, nullptr);
+    const std::string what = "DPM-G (" + std::to_string(test.dx) + ", " + std::to_string(test.dy) + ") ± (" +
+                             std::to_string(test.se_x) + ", " + std::to_string(test.se_y) + "), FD (" +
+                             std::to_string(ref.dx) + ", " + std::to_string(ref.dy) + ") ± (" +
+                             std::to_string(ref.se_x) + ", " + std::to_string(ref.se_y) + ") pixels per unit";
+    EXPECT_LT(std::abs(test.dx - ref.dx), 4 * std::hypot(test.se_x, ref.se_x) + 0.02 * std::abs(ref.dx)) << what;
+    EXPECT_LT(std::abs(test.dy - ref.dy), 4 * std::hypot(test.se_y, ref.se_y) + 0.02 * std::abs(ref.dy)) << what;
+    // The caustic moves by pixels per unit (the test sees a motion), and both EPSMs carry part of it.
+    EXPECT_GT(std::hypot(ref.dx, ref.dy), 20 * std::hypot(ref.se_x, ref.se_y)) << what;
+    const Centroid contribution_only =
+        centroid_motion(g.image.primal, g.image.derivative, g.image.stderr_img, nullptr, nullptr, nullptr, nullptr);
+    EXPECT_GT(std::abs(contribution_only.dx - test.dx) + std::abs(contribution_only.dy - test.dy),
+              0.2 * std::hypot(ref.dx, ref.dy))
+        << what;
+    std::printf("%s\n", what.c_str());
+}
+
+INSTANTIATE_TEST_SUITE_P(Motions, DpmG, testing::Values("light.translate=0,0,1", "mirror.rotate=0,0,1"));
+
 TEST(DpmC, ReverseModeEqualsForwardMode) {
     auto scene = load_scene_string(scene_xml(mirror, above));
     Parameters params(*scene);
@@ -120,7 +198,7 @@ TEST(DpmC, ReverseModeEqualsForwardMode) {
     o.spp = 4;
     o.pixel_fraction = 0.5;
     o.paths = 2;
-    const DerivativeImage d = dpm_derivative(*scene, params, o);
+    const DerivativeImage d = dpm_derivative(*scene, params, o).image;
     Image adjoint(16, 16);
     for (size_t i = 0; i < adjoint.pixels.size(); ++i)
         adjoint.pixels[i] = Color3f(float(i % 7) - 3.f, 1.f, float(i % 3));
@@ -140,9 +218,9 @@ TEST(DpmC, SameResultWhateverTheThreadCount) {
     o.spp = 2;
     o.pixel_fraction = 0.25;
     o.threads = 1;
-    const DerivativeImage one = dpm_derivative(*scene, params, o);
+    const DerivativeImage one = dpm_derivative(*scene, params, o).image;
     o.threads = 2;
-    const DerivativeImage two = dpm_derivative(*scene, params, o);
+    const DerivativeImage two = dpm_derivative(*scene, params, o).image;
     double sum = 0;
     for (size_t i = 0; i < one.derivative.pixels.size(); ++i) {
         EXPECT_EQ(one.derivative.pixels[i], two.derivative.pixels[i]);

@@ -2,6 +2,7 @@
 
 #include "core/batch_stats.h"
 #include "core/interrupt.h"
+#include "diff/material_form.h"
 #include "diff/photon_path.h"
 #include "diff/pixel_driver.h"
 #include "render/light_medium.h"
@@ -36,10 +37,12 @@ void check_options(const Scene& scene, const Parameters& params, const DpmOption
     if (o.paths <= 0) throw Error("dpm: the paths per pixel must be positive");
 }
 
-// One differentiated path: its pixel and contribution on the tape (the estimate's scale included).
+// One differentiated path: its pixel and contribution on the tape (the estimate's scale included), and (DPM-G)
+// its screen position.
 struct PathSample {
     uint64_t pixel;
     Color3<Var> value;
+    Vec2<Var> film;
 };
 
 // The passes [first, first + count) of the estimator: calls primal(pixel, L) with each pixel's SPPM estimate
@@ -125,7 +128,14 @@ void for_each_path(const Scene& scene, const Parameters& params, const DpmOption
                             PhotonPathValue v;
                             if (!photon_path_value(params, path, epsm, v)) continue;
                             const Color3<Var> value = v.ratio * Color3<Var>(c * scale);
-                            if (std::isfinite(value.x.v + value.y.v + value.z.v)) sample(PathSample{pixel, value});
+                            if (!std::isfinite(value.x.v + value.y.v + value.z.v)) continue;
+                            Vec2<Var> screen(Var(pos.x), Var(pos.y));
+                            if (o.variant == DpmVariant::G) {
+                                const Vec3<Var> x = to_reference_camera(params, v.first, ray.o);
+                                Var jacobian;
+                                if (!sensor.film_position(x, Vec3<Var>(-ray.d), screen, jacobian)) continue;
+                            }
+                            sample(PathSample{pixel, value, screen});
                         }
                     }
                 }
@@ -141,13 +151,15 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 } // namespace
 
-DerivativeImage dpm_derivative(const Scene& scene, const Parameters& params, const DpmOptions& o) {
+DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const DpmOptions& o) {
     const auto start = std::chrono::steady_clock::now();
     check_options(scene, params, o);
     const Film& film = *scene.sensor->film;
-    ImageBatches primal_batches, derivative_batches;
+    const bool screen = o.variant == DpmVariant::G;
+    ImageBatches primal_batches, derivative_batches, x_batches, y_batches;
     for (int b = 0; b < o.batches; ++b) {
         Image primal(film.width, film.height), derivative(film.width, film.height);
+        Image motion_x(film.width, film.height), motion_y(film.width, film.height);
         const auto progress = o.progress ? std::function<void(float)>([&, b](float f) {
             o.progress((float(b) + f) / float(o.batches));
         })
@@ -163,16 +175,31 @@ DerivativeImage dpm_derivative(const Scene& scene, const Parameters& params, con
                 Tape::current().forward(params.direction().data(), tangent);
                 const Color3f d(tangent_of(s.value.x, tangent), tangent_of(s.value.y, tangent),
                                 tangent_of(s.value.z, tangent));
-                if (is_finite(d)) derivative.pixels[s.pixel] += d * inv;
+                const Color3f value(s.value.x.v, s.value.y.v, s.value.z.v);
+                const Color3f dx = value * tangent_of(s.film.x, tangent), dy = value * tangent_of(s.film.y, tangent);
+                if (!is_finite(d) || !is_finite(dx) || !is_finite(dy)) return;
+                derivative.pixels[s.pixel] += d * inv;
+                motion_x.pixels[s.pixel] += dx * inv;
+                motion_y.pixels[s.pixel] += dy * inv;
             });
         primal_batches.add(primal);
         derivative_batches.add(derivative);
+        if (screen) {
+            x_batches.add(motion_x);
+            y_batches.add(motion_y);
+        }
     }
-    DerivativeImage out;
-    out.primal = primal_batches.mean();
-    out.derivative = derivative_batches.mean();
-    out.stderr_img = derivative_batches.standard_error();
-    out.seconds = seconds_since(start);
+    DpmDerivative out;
+    out.image.primal = primal_batches.mean();
+    out.image.derivative = derivative_batches.mean();
+    out.image.stderr_img = derivative_batches.standard_error();
+    if (screen) {
+        out.screen_x = x_batches.mean();
+        out.screen_y = y_batches.mean();
+        out.screen_x_stderr = x_batches.standard_error();
+        out.screen_y_stderr = y_batches.standard_error();
+    }
+    out.image.seconds = seconds_since(start);
     return out;
 }
 

@@ -32,8 +32,18 @@ struct DpmOptions {
     std::function<void(float)> progress;
 };
 
-// Forward mode: dI/dθ along params.direction() (the primal: SPPM at the fixed radius, same samples).
-DerivativeImage dpm_derivative(const Scene& scene, const Parameters& params, const DpmOptions& options);
+struct DpmDerivative {
+    // DPM-C: dI/dθ along params.direction() (the primal: SPPM at the fixed radius, same samples). DPM-G: the
+    // contribution derivatives, each at the pixel its path was sampled in.
+    DerivativeImage image;
+    // DPM-G: the screen-space motion of the paths' contributions, Σ I dp/dθ per pixel (p in pixels, Eq. 7),
+    // with standard errors; with `image`, d/dθ of any statistic of where the light lands (e.g. a caustic's
+    // centroid). Empty for DPM-C, whose eye rays do not move.
+    Image screen_x, screen_y, screen_x_stderr, screen_y_stderr;
+};
+
+// Forward mode along params.direction().
+DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const DpmOptions& options);
 // Reverse mode: dL/dθ = Σ_pixels ∂L/∂I · dI/dθ for every enabled parameter.
 Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                       const DpmOptions& options);

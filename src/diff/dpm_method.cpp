@@ -23,8 +23,14 @@ class DpmMethod final : public DerivativeMethod {
     }
 
     MethodDerivative derivative(const Scene& scene, const Parameters& params, const MethodRun& run) override {
-        return one_term_derivative(dpm_derivative(scene, params, options(run, run.batches)), "photon-mapping",
-                                   name_);
+        const DpmDerivative d = dpm_derivative(scene, params, options(run, run.batches));
+        MethodDerivative out = one_term_derivative(
+            d.image, base_.variant == DpmVariant::C ? "photon-mapping" : "contribution", name_);
+        if (base_.variant == DpmVariant::G) {
+            out.terms.push_back({"screen_x", d.screen_x, d.screen_x_stderr});
+            out.terms.push_back({"screen_y", d.screen_y, d.screen_y_stderr});
+        }
+        return out;
     }
 
     MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,

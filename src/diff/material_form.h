@@ -99,6 +99,17 @@ inline Vec3<Var> direction_to_reference_camera(const Parameters& params, const V
             y -= Vec3<Var>(cross(m.vector, Vec3f(d.x.v, d.y.v, d.z.v))) * Var::parameter(0.f, m.index);
     return y;
 }
+// A world point as seen by the moving camera: the camera's motion applied inversely to the point (first order
+// at θ = 0), so that the reference camera's projection can be used.
+inline Vec3<Var> to_reference_camera(const Parameters& params, const Vec3<Var>& x, const Vec3f& camera_position) {
+    Vec3<Var> y = x;
+    for (const Motion& m : params.sensor_motions()) {
+        const Var theta = Var::parameter(0.f, m.index);
+        if (m.kind == Parameter::Kind::Translate) y -= Vec3<Var>(m.vector) * theta;
+        else y -= Vec3<Var>(cross(m.vector, Vec3f(x.x.v, x.y.v, x.z.v) - camera_position)) * theta;
+    }
+    return y;
+}
 // A point-like light's position as it moves.
 inline Vec3<Var> light_position(const Parameters& params, const Emitter& e, const Vec3f& x_e) {
     Vec3<Var> y(x_e);
@@ -152,16 +163,9 @@ public:
         const Var area = norm(cross(moved.position(i[1]) - x0, moved.position(i[2]) - x0));
         return area / Var(area.v);
     }
-    // A world point as seen by the moving camera: the camera's motion applied inversely to the point
-    // (first order at θ = 0), so that the reference camera's projection can be used.
+    // A world point as seen by the moving camera (the reference camera's projection can then be used).
     Vec3<Var> to_reference_camera(const Vec3<Var>& x, const Vec3f& camera_position) const {
-        Vec3<Var> y = x;
-        for (const Motion& m : params_.sensor_motions()) {
-            const Var theta = Var::parameter(0.f, m.index);
-            if (m.kind == Parameter::Kind::Translate) y -= Vec3<Var>(m.vector) * theta;
-            else y -= Vec3<Var>(cross(m.vector, Vec3f(x.x.v, x.y.v, x.z.v) - camera_position)) * theta;
-        }
-        return y;
+        return penumbra::to_reference_camera(params_, x, camera_position);
     }
     // Directions rotate with the camera too (normals used by the film Jacobian).
     Vec3<Var> direction_to_reference_camera(const Vec3<Var>& d) const {
