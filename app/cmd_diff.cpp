@@ -302,8 +302,10 @@ void add_diff_commands(CLI::App& app) {
     g->add_option("--adjoint", grad->adjoint, "adjoint image ∂L/∂I (.exr, the film's size)");
     g->add_option("--target", grad->target,
                   "target image: a primal pass (its own samples) gives the loss and its adjoint");
-    g->add_option("--loss", grad->loss, "loss for --target: l2 or rel_l2")
-        ->check(CLI::IsMember({"l2", "rel_l2"}));
+    g->add_option("--loss", grad->loss,
+                  "loss for --target: l2, rel_l2 or matching (paper 003 Eq. 25: paths matched to the target's "
+                  "pixels; methods dpm-g, dpm-c)")
+        ->check(CLI::IsMember({"l2", "rel_l2", "matching"}));
     g->add_option("-o,--output", grad->output, "gradient as JSON");
     add_method(g, *grad);
     g->callback([grad] { cmd_gradient(*grad); });

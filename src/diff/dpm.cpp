@@ -10,6 +10,7 @@
 #include "render/photon_tracing.h"
 #include "render/sppm.h"
 #include "render/tiles.h"
+#include "optim/matching_loss.h"
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -46,10 +47,12 @@ struct PathSample {
 };
 
 // The passes [first, first + count) of the estimator: calls primal(pixel, L) with each pixel's SPPM estimate
-// of each pass, and, on the thread that traced it with its tape current, sample(s) for each differentiated path.
+// of each pass, and, on the thread that traced it with its tape current, sample(s) for each differentiated path
+// and EPSM (`differentiate` false: the primal only).
 template <typename Primal, typename Sample>
 void for_each_path(const Scene& scene, const Parameters& params, const DpmOptions& o, uint64_t first,
-                   uint64_t count, const std::function<void(float)>& progress, Primal&& primal, Sample&& sample) {
+                   uint64_t count, const std::function<void(float)>& progress, Primal&& primal, Sample&& sample,
+                   bool differentiate = true) {
     const Sensor& sensor = *scene.sensor;
     const Film& film = *sensor.film;
     const SPPMSettings s = photon_mapping_settings(scene);
@@ -106,6 +109,7 @@ void for_each_path(const Scene& scene, const Parameters& params, const DpmOption
                                                total += luminance(c);
                                            });
                     primal(pixel, emission + sum);
+                    if (!differentiate) continue;
                     // The pixel differentiates with probability `pixel_fraction`, photons drawn ∝ luminance.
                     choice.start(o.seed ^ 0xd1b54a32d192ed03ULL, pixel, pass);
                     if (!(total > 0.f) || choice.next_1d() >= float(o.pixel_fraction)) continue;
@@ -232,6 +236,56 @@ Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image&
         for (size_t k = 0; k < dim; ++k)
             out.values[k] += local.gradient[k];
     out.seconds = seconds_since(start);
+    return out;
+}
+
+DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, const Image& target,
+                                  const DpmOptions& o) {
+    const auto start = std::chrono::steady_clock::now();
+    check_options(scene, params, o);
+    const Film& film = *scene.sensor->film;
+    if (target.width != film.width || target.height != film.height)
+        throw Error("dpm: the target is " + std::to_string(target.width) + "x" + std::to_string(target.height) +
+                    ", the film " + std::to_string(film.width) + "x" + std::to_string(film.height));
+    // First run: the primal image (nothing solved), its pixels matched to the target's (Xing et al. 2022):
+    // ∂L/∂p and ∂L/∂I per pixel (Eq. 25).
+    const float inv = 1.f / float(o.spp);
+    Image primal(film.width, film.height);
+    for_each_path(
+        scene, params, o, 0, uint64_t(o.spp), nullptr,
+        [&](uint64_t pixel, const Color3f& l) { primal.pixels[pixel] += l * inv; }, [](const PathSample&) {},
+        false);
+    const ScreenSamples pixels = image_samples(primal);
+    const MatchingLossResult loss =
+        matching_loss(pixels, match_to_image(pixels, Eigen::VectorXd::Ones(pixels.position.rows()), target));
+
+    // Second run: each sampled path estimates its pixel's dI/dθ (its value's scale) and dp/dθ (its screen
+    // motion, weighted by its share of the pixel's samples: the pixel fraction, paths, EPSMs and passes).
+    const size_t dim = size_t(params.dimension());
+    struct Local {
+        std::vector<double> gradient;
+        std::vector<float> scratch;
+        std::vector<std::pair<int32_t, float>> seeds = std::vector<std::pair<int32_t, float>>(5);
+    };
+    tbb::enumerable_thread_specific<Local> locals([dim] { return Local{std::vector<double>(dim, 0.0), {}}; });
+    const float shares = float(o.pixel_fraction) * float(o.paths) * float(o.variant == DpmVariant::C ? 1 : 2) *
+                         float(o.spp);
+    for_each_path(
+        scene, params, o, 0, uint64_t(o.spp), o.progress, [](uint64_t, const Color3f&) {},
+        [&](const PathSample& s) {
+            const Eigen::Index i = Eigen::Index(s.pixel);
+            Local& local = locals.local();
+            for (int k = 0; k < 3; ++k) local.seeds[size_t(k)] = {s.value[k].id, float(loss.d_colour(i, k)) * inv};
+            local.seeds[3] = {s.film.x.id, float(loss.d_position(i, 0)) / (float(film.width) * shares)};
+            local.seeds[4] = {s.film.y.id, float(loss.d_position(i, 1)) / (float(film.height) * shares)};
+            Tape::current().backward(local.seeds, local.gradient.data(), local.scratch);
+        });
+    DpmMatching out;
+    out.loss = loss.value;
+    out.gradient = Gradient{std::vector<double>(dim, 0.0), {}, primal, 0.0, {}};
+    for (const Local& local : locals)
+        for (size_t k = 0; k < dim; ++k) out.gradient.values[k] += local.gradient[k];
+    out.gradient.seconds = seconds_since(start);
     return out;
 }
 

@@ -44,8 +44,22 @@ struct DpmDerivative {
 
 // Forward mode along params.direction().
 DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const DpmOptions& options);
-// Reverse mode: dL/dθ = Σ_pixels ∂L/∂I · dI/dθ for every enabled parameter.
+// Reverse mode: dL/dθ = Σ_pixels ∂L/∂I · dI/dθ for every enabled parameter (DPM-G: contribution derivatives).
 Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                       const DpmOptions& options);
+
+struct DpmMatching {
+    Gradient gradient;
+    double loss = 0; // Eq. 25 averaged over the pixels
+};
+
+// The matching loss of §5.3 (Eq. 25, optim/matching_loss.h): the estimator's SPPM image is matched pixel to
+// pixel to the target by entropic optimal transport on RGB + xy (Xing et al. 2022, 2023), and each pixel is
+// pulled toward its match's position and colour; dL/dθ chains ∂L/∂p and ∂L/∂I with the screen-space motion
+// and the contribution derivatives of the paths sampled in the pixel (DPM-G: averaged over its two EPSMs;
+// DPM-C: contribution only). The passes are traced twice with the same random numbers: once for the image
+// to match, once to differentiate.
+DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, const Image& target,
+                                  const DpmOptions& options);
 
 } // namespace penumbra

@@ -38,6 +38,15 @@ class DpmMethod final : public DerivativeMethod {
         return method_gradient(dpm_gradient(scene, params, adjoint, options(run, 1)), name_);
     }
 
+    MethodGradient loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
+                                 LossKind loss, const MethodRun& run) override {
+        if (loss != LossKind::Matching) return DerivativeMethod::loss_gradient(scene, params, target, loss, run);
+        const DpmMatching m = dpm_matching_gradient(scene, params, target, options(run, 1));
+        MethodGradient out = method_gradient(m.gradient, name_ + ", matching loss");
+        out.loss = m.loss;
+        return out;
+    }
+
   private:
     DpmOptions options(const MethodRun& run, int batches) const {
         DpmOptions o = base_;

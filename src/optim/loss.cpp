@@ -40,15 +40,21 @@ LossResult relative_l2_loss(const Image& image, const Image& target) {
 }
 
 LossResult compute_loss(LossKind kind, const Image& image, const Image& target) {
+    if (kind == LossKind::Matching)
+        throw Error("the matching loss (paper 003, Eq. 25) pairs sampled paths with target pixels, not images: "
+                    "use it with method dpm-g (or dpm-c)");
     return kind == LossKind::L2 ? l2_loss(image, target) : relative_l2_loss(image, target);
 }
 
 LossKind parse_loss_kind(const std::string& name) {
     if (name == "l2") return LossKind::L2;
     if (name == "rel_l2") return LossKind::RelativeL2;
-    throw Error("unknown loss '" + name + "' (expected l2 or rel_l2)");
+    if (name == "matching") return LossKind::Matching;
+    throw Error("unknown loss '" + name + "' (expected l2, rel_l2 or matching)");
 }
 
-std::string loss_kind_name(LossKind kind) { return kind == LossKind::L2 ? "l2" : "rel_l2"; }
+std::string loss_kind_name(LossKind kind) {
+    return kind == LossKind::L2 ? "l2" : kind == LossKind::RelativeL2 ? "rel_l2" : "matching";
+}
 
 } // namespace penumbra

@@ -541,15 +541,26 @@ OptimizeResult optimize(const OptimizeConfig& config,
         std::vector<double> gradient(size_t(problem.dimension()), 0.0);
         for (size_t v : subset) {
             views.select(v);
-            const Image primal = render_image(
-                *scene, config.spp, view_stream(config.seed, 2 * uint64_t(it) + 1, v), config.threads);
-            const LossResult loss = compute_loss(config.loss, primal, targets[v]);
-            loss_sum += loss.value;
-            if (config.snapshot_every > 0 && it % config.snapshot_every == 0)
+            std::string* description = it == 0 && v == subset[0] ? &result.description : nullptr;
+            std::vector<double> g;
+            Image primal;
+            if (config.loss == LossKind::Matching) {
+                // The method matches its paths to the target and differentiates them in one call.
+                run.seed = view_stream(config.seed, 2 * uint64_t(it) + 2, v);
+                MethodGradient mg;
+                g = problem.loss_gradient(targets[v], config.loss, *method, run, mg, description);
+                loss_sum += mg.loss;
+                primal = mg.primal;
+            } else {
+                primal = render_image(*scene, config.spp, view_stream(config.seed, 2 * uint64_t(it) + 1, v),
+                                      config.threads);
+                const LossResult loss = compute_loss(config.loss, primal, targets[v]);
+                loss_sum += loss.value;
+                run.seed = view_stream(config.seed, 2 * uint64_t(it) + 2, v);
+                g = problem.gradient(loss.adjoint, *method, run, description);
+            }
+            if (config.snapshot_every > 0 && it % config.snapshot_every == 0 && primal.width > 0)
                 write_image((out / view_file(snapshot_name(it), ".png", config, views, v)).string(), primal);
-            run.seed = view_stream(config.seed, 2 * uint64_t(it) + 2, v);
-            const std::vector<double> g = problem.gradient(
-                loss.adjoint, *method, run, it == 0 && v == subset[0] ? &result.description : nullptr);
             for (size_t k = 0; k < g.size(); ++k)
                 gradient[k] += g[k] / double(subset.size());
             if (const auto bad = std::find_if(g.begin(), g.end(), [](double d) { return !std::isfinite(d); });

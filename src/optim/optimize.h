@@ -41,7 +41,7 @@
 //                              With none of the three, gradient_spp is the psdr total's budget, split over
 //                              the terms by a calibration pass at the first iteration (diff/budget.h); with
 //                              any of them, the others default to 4 and the interior gets gradient_spp.
-//   loss            string     "l2" (default) | "rel_l2"
+//   loss            string     "l2" (default) | "rel_l2" | "matching" (paper 003 Eq. 25, methods dpm-g/dpm-c)
 //   iterations      int        number of Adam steps
 //   spp             int        samples per pixel of the primal image of each iteration
 //   gradient_spp    int        samples per pixel of the gradient (see primary_spp), independent of the

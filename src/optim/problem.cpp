@@ -255,7 +255,17 @@ void InverseProblem::apply() {
 
 std::vector<double> InverseProblem::gradient(const Image& adjoint, DerivativeMethod& method,
                                              const MethodRun& run, std::string* description) const {
-    const MethodGradient g = method.gradient(scene_, *params_, adjoint, run);
+    return to_tangent(method.gradient(scene_, *params_, adjoint, run), description);
+}
+
+std::vector<double> InverseProblem::loss_gradient(const Image& target, LossKind loss, DerivativeMethod& method,
+                                                  const MethodRun& run, MethodGradient& g,
+                                                  std::string* description) const {
+    g = method.loss_gradient(scene_, *params_, target, loss, run);
+    return to_tangent(g, description);
+}
+
+std::vector<double> InverseProblem::to_tangent(const MethodGradient& g, std::string* description) const {
     if (description) {
         *description = g.description;
         for (const std::string& w : g.warnings) *description += "; warning: " + w;

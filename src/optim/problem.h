@@ -87,7 +87,16 @@ class InverseProblem {
     // `description`, when given, receives the method's description of the run.
     std::vector<double> gradient(const Image& adjoint, DerivativeMethod& method, const MethodRun& run,
                                  std::string* description = nullptr) const;
+    // The same for a loss the method evaluates itself against the target (the matching loss of dpm-g); `g`
+    // receives the method's result (its loss and primal image).
+    std::vector<double> loss_gradient(const Image& target, LossKind loss, DerivativeMethod& method,
+                                      const MethodRun& run, MethodGradient& g,
+                                      std::string* description = nullptr) const;
 
+  private:
+    std::vector<double> to_tangent(const MethodGradient& g, std::string* description) const;
+
+  public:
     // Errors against true values (the values() layout): ‖x − x*‖ / ‖x*‖ over Data entries; ‖t − t*‖ (scene
     // units) and the angle of R R*ᵀ (degrees) of one pose entry. NaN when there is no such entry.
     double data_error(const std::vector<double>& truth) const;
