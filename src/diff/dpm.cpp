@@ -257,7 +257,8 @@ DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, 
         false);
     const ScreenSamples pixels = image_samples(primal);
     const MatchingLossResult loss =
-        matching_loss(pixels, match_to_image(pixels, Eigen::VectorXd::Ones(pixels.position.rows()), target));
+        matching_loss(pixels, match_to_image(pixels, Eigen::VectorXd::Ones(pixels.position.rows()), target,
+                                               o.matching));
 
     // Second run: each sampled path estimates its pixel's dI/dθ (its value's scale) and dp/dθ (its screen
     // motion, weighted by its share of the pixel's samples: the pixel fraction, paths, EPSMs and passes).

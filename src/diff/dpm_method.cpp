@@ -15,6 +15,8 @@ class DpmMethod final : public DerivativeMethod {
         base_.variant = variant;
         base_.pixel_fraction = o.get_float("pixel-fraction", base_.pixel_fraction);
         base_.paths = o.get_int("paths", base_.paths);
+        base_.matching.scaling = o.get_float("matching-scaling", base_.matching.scaling);
+        base_.matching.max_iterations = o.get_int("matching-iterations", base_.matching.max_iterations);
         char text[160];
         std::snprintf(text, sizeof(text), "differentiable photon mapping (%s), %g of the pixels, %d path%s each",
                       variant == DpmVariant::C ? "DPM-C, fixed eye rays" : "DPM-G, fixed density + vertex merging",
@@ -71,6 +73,10 @@ std::vector<MethodOption> dpm_options() {
              {},
              1e-6,
              1.0},
+            {"matching-scaling", Type::Float, "Sinkhorn's blur ratio per annealing step for the matching loss (default 0.5, GeomLoss's)", {}, 0.0,
+             0.99},
+            {"matching-iterations", Type::Int, "Sinkhorn iterations at the final blur for the matching loss (default 1: stop after the annealing)", {}, 1,
+             100000},
             {"paths", Type::Int, "photon-mapping paths differentiated per sampled pixel and pass (default 1)", {}, 1,
              1024}};
 }
