@@ -4,6 +4,7 @@
 // twice by a glass block, onto a diffuse floor the camera sees alone (no moving visibility edge, which DPM
 // does not differentiate). Reverse mode against forward mode, determinism across thread counts, errors.
 #include "core/error.h"
+#include "core/image.h"
 #include "diff/dpm.h"
 #include "diff/method.h"
 #include "diff_cases.h"
@@ -189,6 +190,53 @@ TEST_P(DpmG, ScreenSpaceMotionMatchesTheCentroidsFiniteDifference) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Motions, DpmG, testing::Values("light.translate=0,0,1", "mirror.rotate=0,0,1"));
+
+// Paper 003's Fig. 6 and a glass slab (scenes/dpm/, docs/dpm-validation.md) against stored central differences
+// of SPPM at 256 passes (tests/data/dpm/, scripts/make_dpm_references.sh): the expectation at a fixed radius
+// does not depend on the photon count or the passes, so DPM-C runs with fewer of both.
+struct StoredCase {
+    std::string scene, param, reference;
+    int passes, paths;
+};
+
+class DpmCStored : public testing::TestWithParam<StoredCase> {};
+
+TEST_P(DpmCStored, MatchesStoredFiniteDifferences) {
+    const StoredCase& c = GetParam();
+    const std::string root = std::string(PENUMBRA_SOURCE_DIR) + "/";
+    // Photons shared by many paths' gathers are cheap next to the paths' solves: few photons, more paths.
+    auto scene = load_scene(root + "scenes/dpm/" + c.scene + ".xml", {{"photons", "5000"}});
+    Parameters params(*scene);
+    params.enable({parse_param_selection(c.param)});
+    DpmOptions o;
+    o.spp = c.passes / 16;
+    o.batches = 16;
+    o.pixel_fraction = 1.0;
+    o.paths = c.paths;
+    o.seed = 21 + 1000 * test_seed();
+    const DpmDerivative d = dpm_derivative(*scene, params, o);
+    const std::string ref = root + "tests/data/dpm/" + c.reference;
+    const DiffCheck check = check_against(d.image.derivative, d.image.stderr_img, read_image(ref + ".exr", false),
+                                          read_image(ref + "_stderr.exr", false));
+    // The image mean's z from the spread of the batch means (pixels share photons: their errors correlate);
+    // the reference's share, from its pixels, is the smaller by an order of magnitude.
+    const double ref_se = std::abs(check.comparison.mean_ref - check.comparison.mean_test) /
+                          std::max(1e-30, std::abs(check.comparison.mean_z));
+    const double z = (check.comparison.mean_test - check.comparison.mean_ref) / std::hypot(d.mean_stderr, ref_se);
+    const bool passes = std::abs(z) < 4.0 && check.outliers_4sigma < 0.02 &&
+                        check.comparison.relerr < 1.5 * check.noise_relerr + 0.02 &&
+                        check.comparison4.relerr < 1.5 * check.comparison4.noise_relerr + 0.02;
+    EXPECT_TRUE(passes) << describe(check) << ", z of the batch means " << z;
+    std::printf("%s: %s, z of the batch means %.2f\n", c.reference.c_str(), describe(check).c_str(), z);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Fig6, DpmCStored,
+    testing::Values(StoredCase{"reflector", "reflector.rotate@2,1.5,0=0,1,0", "reflector_rotate_y", 64, 16},
+                    StoredCase{"reflector", "light.translate=1,0,0", "reflector_light_x", 64, 16},
+                    StoredCase{"slab", "slab_top.translate=0,1,0", "slab_thickness", 32, 8},
+                    StoredCase{"slab", "slab_top.deform@0.15,2.2,-0.1=0,1,0", "slab_bulge", 32, 8}),
+    [](const testing::TestParamInfo<StoredCase>& info) { return info.param.reference; });
 
 TEST(DpmC, ReverseModeEqualsForwardMode) {
     auto scene = load_scene_string(scene_xml(mirror, above));

@@ -44,6 +44,10 @@ struct DpmDerivative {
     // with standard errors; with `image`, d/dθ of any statistic of where the light lands (e.g. a caustic's
     // centroid). Empty for DPM-C, whose eye rays do not move.
     Image screen_x, screen_y, screen_x_stderr, screen_y_stderr;
+    // The standard error of the derivative image's mean from the spread of the batches' means: photons are
+    // shared by neighbouring pixels, so pixel errors are correlated and sqrt(Σσ²)/N underestimates it (by up
+    // to 2× on the validation scenes, docs/dpm-validation.md).
+    double mean_stderr = 0;
 };
 
 // Forward mode along params.direction().
