@@ -58,12 +58,7 @@ void for_each_path(const Scene& scene, const Parameters& params, const DpmOption
     const SPPMSettings s = photon_mapping_settings(scene);
     const float radius = sppm_radius(scene, s);
     const EyeSubpathSettings eye{s.max_depth, s.rr_depth};
-    PhotonTracingSettings light;
-    light.paths = uint64_t(s.photon_count);
-    light.max_depth = s.max_depth;
-    light.rr_depth = s.rr_depth;
-    light.granularity = uint64_t(s.granularity);
-    light.threads = o.threads;
+    const PhotonTracingSettings light = photon_tracing_settings(s, o.threads);
     // L = Σ_p K f Φ_p / (π r² N) per pass (render/sppm.cpp at a fixed radius).
     const float norm = float(1.0 / (Pi * double(radius) * radius * double(s.photon_count)));
     const std::vector<PhotonPathEpsm> epsms =
@@ -149,6 +144,23 @@ void for_each_path(const Scene& scene, const Parameters& params, const DpmOption
     }
 }
 
+// A thread's reverse-mode state: its gradient, the sweep's scratch and the seeds (node, adjoint) of one path.
+struct ReverseSweep {
+    explicit ReverseSweep(size_t dim) : gradient(dim, 0.0) {}
+    std::vector<double> gradient;
+    std::vector<float> scratch;
+    std::vector<std::pair<int32_t, float>> seeds;
+    void run() { Tape::current().backward(seeds, gradient.data(), scratch); }
+};
+
+// Σ of the threads' gradients.
+std::vector<double> total(const tbb::enumerable_thread_specific<ReverseSweep>& sweeps, size_t dim) {
+    std::vector<double> sum(dim, 0.0);
+    for (const ReverseSweep& s : sweeps)
+        for (size_t k = 0; k < dim; ++k) sum[k] += s.gradient[k];
+    return sum;
+}
+
 // The mean over pixels and channels.
 double channel_mean(const Image& image) {
     double sum = 0;
@@ -228,28 +240,19 @@ Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image&
     const Film& film = *scene.sensor->film;
     check_adjoint_size(film, adjoint);
     const size_t dim = size_t(params.dimension());
-    struct Local {
-        std::vector<double> gradient;
-        std::vector<float> scratch;
-        std::vector<std::pair<int32_t, float>> seeds = std::vector<std::pair<int32_t, float>>(3);
-    };
-    tbb::enumerable_thread_specific<Local> locals([dim] { return Local{std::vector<double>(dim, 0.0), {}}; });
-    Gradient out{std::vector<double>(dim, 0.0), {}, Image(film.width, film.height), 0.0, {}};
+    tbb::enumerable_thread_specific<ReverseSweep> sweeps([dim] { return ReverseSweep(dim); });
+    Gradient out{{}, {}, Image(film.width, film.height), 0.0, {}};
     const float inv = 1.f / float(o.spp);
     for_each_path(
         scene, params, o, 0, uint64_t(o.spp), o.progress,
         [&](uint64_t pixel, const Color3f& l) { out.primal.pixels[pixel] += l * inv; },
         [&](const PathSample& s) {
-            Local& local = locals.local();
+            ReverseSweep& sweep = sweeps.local();
             const Color3f a = adjoint.pixels[s.pixel] * inv;
-            local.seeds[0] = {s.value.x.id, a.x};
-            local.seeds[1] = {s.value.y.id, a.y};
-            local.seeds[2] = {s.value.z.id, a.z};
-            Tape::current().backward(local.seeds, local.gradient.data(), local.scratch);
+            sweep.seeds = {{s.value.x.id, a.x}, {s.value.y.id, a.y}, {s.value.z.id, a.z}};
+            sweep.run();
         });
-    for (const Local& local : locals)
-        for (size_t k = 0; k < dim; ++k)
-            out.values[k] += local.gradient[k];
+    out.values = total(sweeps, dim);
     out.seconds = seconds_since(start);
     return out;
 }
@@ -278,29 +281,24 @@ DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, 
     // Second run: each sampled path estimates its pixel's dI/dθ (its value's scale) and dp/dθ (its screen
     // motion, weighted by its share of the pixel's samples: the pixel fraction, paths, EPSMs and passes).
     const size_t dim = size_t(params.dimension());
-    struct Local {
-        std::vector<double> gradient;
-        std::vector<float> scratch;
-        std::vector<std::pair<int32_t, float>> seeds = std::vector<std::pair<int32_t, float>>(5);
-    };
-    tbb::enumerable_thread_specific<Local> locals([dim] { return Local{std::vector<double>(dim, 0.0), {}}; });
+    tbb::enumerable_thread_specific<ReverseSweep> sweeps([dim] { return ReverseSweep(dim); });
     const float shares = float(o.pixel_fraction) * float(o.paths) * float(o.variant == DpmVariant::C ? 1 : 2) *
                          float(o.spp);
     for_each_path(
         scene, params, o, 0, uint64_t(o.spp), o.progress, [](uint64_t, const Color3f&) {},
         [&](const PathSample& s) {
             const Eigen::Index i = Eigen::Index(s.pixel);
-            Local& local = locals.local();
-            for (int k = 0; k < 3; ++k) local.seeds[size_t(k)] = {s.value[k].id, float(loss.d_colour(i, k)) * inv};
-            local.seeds[3] = {s.film.x.id, float(loss.d_position(i, 0)) / (float(film.width) * shares)};
-            local.seeds[4] = {s.film.y.id, float(loss.d_position(i, 1)) / (float(film.height) * shares)};
-            Tape::current().backward(local.seeds, local.gradient.data(), local.scratch);
+            ReverseSweep& sweep = sweeps.local();
+            sweep.seeds = {{s.value.x.id, float(loss.d_colour(i, 0)) * inv},
+                           {s.value.y.id, float(loss.d_colour(i, 1)) * inv},
+                           {s.value.z.id, float(loss.d_colour(i, 2)) * inv},
+                           {s.film.x.id, float(loss.d_position(i, 0)) / (float(film.width) * shares)},
+                           {s.film.y.id, float(loss.d_position(i, 1)) / (float(film.height) * shares)}};
+            sweep.run();
         });
     DpmMatching out;
     out.loss = loss.value;
-    out.gradient = Gradient{std::vector<double>(dim, 0.0), {}, primal, 0.0, {}};
-    for (const Local& local : locals)
-        for (size_t k = 0; k < dim; ++k) out.gradient.values[k] += local.gradient[k];
+    out.gradient = Gradient{total(sweeps, dim), {}, primal, 0.0, {}};
     out.gradient.seconds = seconds_since(start);
     return out;
 }

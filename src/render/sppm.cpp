@@ -71,6 +71,16 @@ float sppm_radius(const Scene& scene, const SPPMSettings& settings) {
     return r;
 }
 
+PhotonTracingSettings photon_tracing_settings(const SPPMSettings& settings, int threads) {
+    PhotonTracingSettings light;
+    light.paths = uint64_t(settings.photon_count);
+    light.max_depth = settings.max_depth;
+    light.rr_depth = settings.rr_depth;
+    light.granularity = uint64_t(settings.granularity);
+    light.threads = threads;
+    return light;
+}
+
 std::vector<Layer> SPPMIntegrator::render(const Scene& scene, const RenderOptions& options,
                                           RenderStats& stats) const {
     if (scene_has_media(scene))
@@ -88,12 +98,7 @@ std::vector<Layer> SPPMIntegrator::render(const Scene& scene, const RenderOption
         px.radius = r0;
     std::vector<VisiblePoint> points(pixels.size());
     const EyeSubpathSettings eye{s_.max_depth, s_.rr_depth};
-    PhotonTracingSettings light;
-    light.paths = uint64_t(s_.photon_count);
-    light.max_depth = s_.max_depth;
-    light.rr_depth = s_.rr_depth;
-    light.granularity = uint64_t(s_.granularity);
-    light.threads = options.threads;
+    const PhotonTracingSettings light = photon_tracing_settings(s_, options.threads);
     std::atomic<uint64_t> rays{0}, dropped{0};
     PhotonMap map;
     const auto start = std::chrono::steady_clock::now();

@@ -1,6 +1,7 @@
 #pragma once
 #include "render/integrator.h"
 #include "render/photon_kernel.h"
+#include "render/photon_tracing.h"
 
 namespace penumbra {
 
@@ -26,6 +27,8 @@ struct SPPMSettings {
 
 // The initial merging radius: `initial_radius`, or 5 × the scene's radius / max(width, height) for 0.
 float sppm_radius(const Scene& scene, const SPPMSettings& settings);
+// The photon pass of the settings on `threads` threads.
+PhotonTracingSettings photon_tracing_settings(const SPPMSettings& settings, int threads);
 
 class SPPMIntegrator final : public Integrator {
   public:
