@@ -1,5 +1,6 @@
 #include "diff/photon_path.h"
 
+#include "render/adjoint_shading.h"
 #include "scene/bsdf.h"
 #include "scene/shape.h"
 
@@ -90,16 +91,18 @@ bool photon_path_value(const Parameters& params, const PhotonPath& path, PhotonP
         const Var t = norm(x.x[size_t(e)] - x.x[size_t(e + 1)]) * Var(1.f / path.radius);
         if (!scale_by(ratio, photon_kernel(path.kernel, t))) return false;
     }
-    // Light subpath: the middle vertices' BSDFs (adjoint transport) and the emission.
+    // Light subpath: the middle vertices' BSDFs with adjoint transport's shading-normal correction, and the
+    // emission.
     for (int m = 1; m < j; ++m) {
         const int i = light_index(m);
         SurfaceInteraction<Var>& si = x.si[size_t(i)];
         si.wi = si.to_local(dir(i, i + 1));
-        const Vec3<Var> wo = si.to_local(dir(i, i - 1));
+        const Vec3<Var> next = dir(i, i - 1), wo = si.to_local(next);
         const BSDF* bsdf = si.bsdf();
         if (!scale_by(ratio, light[size_t(m)].delta ? bsdf->delta_weight(importance, si, wo)
                                                     : bsdf->eval(importance, si, wo)))
             return false;
+        if (!scale_by(ratio, adjoint_shading_correction(si, next))) return false;
     }
     const Emitter& emitter = *y0.emitter;
     Color3<Var> emitted;

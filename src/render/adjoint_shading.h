@@ -7,12 +7,15 @@
 namespace penumbra {
 
 // |w_prev·n_s||w_next·n_g| / (|w_prev·n_g||w_next·n_s|), applied on top of eval()'s |w_next·n_s| factor;
-// w_prev (si.wi) points toward the light, w_next toward the camera side.
-inline float adjoint_shading_correction(const SurfaceInteraction3f& si, const Vec3f& w_next_world) {
-    const Vec3f w_prev = si.to_world(si.wi);
-    const float denom = std::abs(dot(w_prev, si.n)) * std::abs(dot(w_next_world, si.sh_frame.n));
-    if (denom == 0.f) return 0.f;
-    return std::abs(dot(w_prev, si.sh_frame.n)) * std::abs(dot(w_next_world, si.n)) / denom;
+// w_prev (si.wi) points toward the light, w_next toward the camera side. Templated on the scalar type (the
+// differentiable photon-mapping paths evaluate it on the tape).
+template <typename T>
+T adjoint_shading_correction(const SurfaceInteraction<T>& si, const Vec3<T>& w_next_world) {
+    using std::abs;
+    const Vec3<T> w_prev = si.to_world(si.wi);
+    const T denom = abs(dot(w_prev, si.n)) * abs(dot(w_next_world, si.sh_frame.n));
+    if (denom == T(0)) return T(0);
+    return abs(dot(w_prev, si.sh_frame.n)) * abs(dot(w_next_world, si.n)) / denom;
 }
 
 } // namespace penumbra
