@@ -100,7 +100,13 @@ DiffCheck run_case(const Case& c, DerivativeImage* out = nullptr) {
 
 } // namespace
 
-// (The mirror's rotation and the light's translation are checked on paper 003's Fig. 6 below.)
+// (The mirror's rotation and the light's translation are checked on paper 003's Fig. 6 below.) A spot's rotation
+// turns its beam across the mirror: the photons keep their world directions, the intensity profile moves.
+TEST(DpmC, SpotRotationMatchesFiniteDifferences) {
+    const DiffCheck c = run_case({mirror, above, "light.rotate=0,0,1", 0.005});
+    EXPECT_TRUE(c.passes()) << describe(c);
+}
+
 TEST(DpmC, GlassRotationMatchesFiniteDifferences) {
     const DiffCheck c = run_case({glass, low, "block.rotate=0,0,1", 0.01});
     EXPECT_TRUE(c.passes()) << describe(c);

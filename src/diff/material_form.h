@@ -118,6 +118,20 @@ inline Vec3<Var> light_position(const Parameters& params, const Emitter& e, cons
     return y;
 }
 
+// The inverse of a light's motion applied to a receiver point x (first order at θ = 0): the reference light's
+// emission at the result is the moved light's at x, since the light is rigid.
+inline Vec3<Var> to_reference_light(const Parameters& params, const Emitter& e, const Vec3<Var>& x) {
+    Vec3<Var> y = x;
+    for (const Motion& m : params.emitter_motions(&e)) {
+        const Var theta = Var::parameter(0.f, m.index);
+        if (m.kind == Parameter::Kind::Translate)
+            y -= Vec3<Var>(m.vector) * theta;
+        else
+            y -= Vec3<Var>(cross(m.vector, Vec3f(x.x.v, x.y.v, x.z.v) - m.center)) * theta;
+    }
+    return y;
+}
+
 class MaterialForm {
 public:
     MaterialForm(const Scene& scene, const Parameters& params, FirstVertex first_vertex)
@@ -196,15 +210,7 @@ public:
     // The inverse motion applied to a receiver point x (or a direction d): the reference light's emission at
     // the result is the moved light's at x, since the light is rigid.
     Vec3<Var> to_reference_light(const Emitter& e, const Vec3<Var>& x) const {
-        Vec3<Var> y = x;
-        for (const Motion& m : params_.emitter_motions(&e)) {
-            const Var theta = Var::parameter(0.f, m.index);
-            if (m.kind == Parameter::Kind::Translate)
-                y -= Vec3<Var>(m.vector) * theta;
-            else
-                y -= Vec3<Var>(cross(m.vector, Vec3f(x.x.v, x.y.v, x.z.v) - m.center)) * theta;
-        }
-        return y;
+        return penumbra::to_reference_light(params_, e, x);
     }
     Vec3<Var> direction_to_reference_light(const Emitter& e, const Vec3f& d) const {
         Vec3<Var> y(d);

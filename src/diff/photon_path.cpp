@@ -1,5 +1,6 @@
 #include "diff/photon_path.h"
 
+#include "diff/material_form.h"
 #include "render/adjoint_shading.h"
 #include "scene/bsdf.h"
 #include "scene/shape.h"
@@ -114,9 +115,9 @@ bool photon_path_value(const Parameters& params, const PhotonPath& path, PhotonP
         emitted = emitter.is_delta() ? emitter.eval_delta(Vec3<Var>(light[1].p))
                                      : emitter.eval_environment(Vec3<Var>(y0.d_env));
     } else {
-        // A point-like light emits along a direction fixed in the world (its translations keep it): only
-        // its intensity's parameters change the emission.
-        emitted = emitter.eval_delta(Vec3<Var>(light[1].p));
+        // A point-like light emits along a direction fixed in the world (its translations keep it); its
+        // rotations turn that direction in its own frame, where its intensity is defined.
+        emitted = emitter.eval_delta(to_reference_light(params, emitter, x.x[size_t(L)] + Vec3<Var>(light[1].p - y0.p)));
     }
     if (!scale_by(ratio, emitted)) return false;
     out.ratio = ratio;
