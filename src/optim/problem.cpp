@@ -59,11 +59,12 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
                         "parameter '" + op.name +
                         "': the large-steps parameterization applies to a shape's vertex_positions only");
                 if (std::isfinite(op.lower) || std::isfinite(op.upper))
-                    throw Error("parameter '" + op.name + "': the large-steps parameterization takes no bounds");
+                    throw Error("parameter '" + op.name +
+                                "': the large-steps parameterization takes no bounds");
                 if (!op.free.empty() && op.free.size() != 3)
                     throw Error("parameter '" + op.name +
-                                "': the large-steps parameterization takes a 'free' mask of 3 components only "
-                                "(x, y, z of every vertex)");
+                                "': the large-steps parameterization takes a 'free' mask of 3 components "
+                                "only (x, y, z of every vertex)");
                 e.uniform_adam = op.uniform_adam;
                 e.large_steps = std::make_shared<const LargeSteps>(
                     e.shape->mesh.indices, int(e.shape->mesh.vertex_count()), op.large_steps_lambda);
@@ -115,7 +116,8 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
         } else if (free.size() == size_t(e.size)) {
             e.free = free;
         } else if (e.shape && free.size() == 3 && size_t(e.size) == 3 * e.shape->mesh.vertex_count()) {
-            for (int k = 0; k < e.size; ++k) e.free.push_back(free[size_t(k % 3)]); // (x, y, z) of each vertex
+            for (int k = 0; k < e.size; ++k)
+                e.free.push_back(free[size_t(k % 3)]); // (x, y, z) of each vertex
         } else {
             throw Error("parameter '" + e.name + "': 'free' has " + std::to_string(free.size()) +
                         " entries for " + std::to_string(e.size) + " components" +
