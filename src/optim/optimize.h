@@ -11,12 +11,13 @@
 //                              bounding-box center, no bounds), both relative to the scene's pose
 //                              (optim/problem.h); "<shape>.deform@cx,cy,cz" a deformation handle at c (3
 //                              values, its displacement, world units; several per shape, not with a pose;
-//                              optim/deformation.h).
+//                              optim/deformation.h). "free": [bool, ...] the optimized components (one per
+//                              component, or 3 for a vertex_positions: x, y, z of every vertex).
 //                              "parameterization": {"type": "large_steps", "lambda": λ (default 19),
 //                              "uniform_adam": bool (default true)}: a <shape>.vertex_positions stepped in
-//                              u = (I + λL) x (optim/large_steps.h; no bounds, no free mask), by Adam with
-//                              one second moment for the whole mesh (optim/adam.h) unless uniform_adam is
-//                              false. "init" (and a target value) of a vertex_positions may be a mesh file
+//                              u = (I + λL) x (optim/large_steps.h; no bounds, "free" of 3 only), by Adam
+//                              with one second moment for the whole mesh (optim/adam.h) unless uniform_adam
+//                              is false. "init" (and a target value) of a vertex_positions may be a mesh file
 //                              (.ply/.obj, relative to the configuration, same vertex count and order): its
 //                              positions as stored
 //   target          object     {"image": path relative to the configuration}  or

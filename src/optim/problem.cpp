@@ -58,9 +58,13 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
                     throw Error(
                         "parameter '" + op.name +
                         "': the large-steps parameterization applies to a shape's vertex_positions only");
-                if (std::isfinite(op.lower) || std::isfinite(op.upper) || !op.free.empty())
+                if (std::isfinite(op.lower) || std::isfinite(op.upper))
                     throw Error("parameter '" + op.name +
-                                "': the large-steps parameterization takes no bounds and no 'free' mask");
+                                "': the large-steps parameterization takes no bounds");
+                if (!op.free.empty() && op.free.size() != 3)
+                    throw Error("parameter '" + op.name +
+                                "': the large-steps parameterization takes a 'free' mask of 3 components "
+                                "only (x, y, z of every vertex)");
                 e.uniform_adam = op.uniform_adam;
                 e.large_steps = std::make_shared<const LargeSteps>(
                     e.shape->mesh.indices, int(e.shape->mesh.vertex_count()), op.large_steps_lambda);
@@ -107,10 +111,18 @@ InverseProblem::InverseProblem(Scene& scene, const std::vector<OptimizedParamete
     for (size_t i = 0; i < entries_.size(); ++i) {
         Entry& e = entries_[i];
         const std::vector<bool>& free = parameters[i].free;
-        if (!free.empty() && free.size() != size_t(e.size))
+        if (free.empty()) {
+            e.free.assign(size_t(e.size), true);
+        } else if (free.size() == size_t(e.size)) {
+            e.free = free;
+        } else if (e.shape && free.size() == 3 && size_t(e.size) == 3 * e.shape->mesh.vertex_count()) {
+            for (int k = 0; k < e.size; ++k)
+                e.free.push_back(free[size_t(k % 3)]); // (x, y, z) of each vertex
+        } else {
             throw Error("parameter '" + e.name + "': 'free' has " + std::to_string(free.size()) +
-                        " entries for " + std::to_string(e.size) + " components");
-        e.free = free.empty() ? std::vector<bool>(size_t(e.size), true) : free;
+                        " entries for " + std::to_string(e.size) + " components" +
+                        (e.shape ? " (or 3: x, y, z of every vertex)" : ""));
+        }
     }
     for (const Shape* shape : deformed)
         if (pose_of.count(shape) || deformation_of.count(shape))
@@ -237,7 +249,8 @@ void InverseProblem::adam_step(Adam& adam, const std::vector<double>& gradient, 
     std::vector<double> delta(x.size());
     for (const Entry& e : entries_)
         for (int k = e.offset; k < e.offset + e.size; ++k)
-            delta[size_t(k)] = e.kind == Kind::Rotate ? x[size_t(k)] : x[size_t(k)] - before[size_t(k)];
+            if (e.free[size_t(k - e.offset)]) // the round trip through u must not move fixed components
+                delta[size_t(k)] = e.kind == Kind::Rotate ? x[size_t(k)] : x[size_t(k)] - before[size_t(k)];
     retract(delta);
 }
 

@@ -30,7 +30,9 @@ struct OptimizedParameter {
     double learning_rate = 0.01;
     double lower = -std::numeric_limits<double>::infinity(); // not allowed for rotations
     double upper = std::numeric_limits<double>::infinity();
-    std::vector<bool> free = {}; // which components are optimized (empty: all); the others keep their init
+    // Which components are optimized (empty: all; for a vertex_positions also 3 booleans, x, y, z of every
+    // vertex); the others keep their init.
+    std::vector<bool> free = {};
     // > 0: a <shape>.vertex_positions stepped in u = (I + λL) x, λ this value (optim/large_steps.h)
     double large_steps_lambda = 0;
     bool uniform_adam = true; // large steps: Adam with one second moment for the parameter (optim/adam.h)
@@ -58,8 +60,10 @@ class InverseProblem {
 
     // Resolves the names against the scene. Throws Error for unknown names, camera motions, scaling, a
     // parameter given twice, vertex_positions together with a pose of the same shape, bounds on a rotation,
-    // a `free` mask whose length is not the parameter's number of components, and a large-steps
-    // parameterization of anything but a vertex_positions without bounds and mask.
+    // a `free` mask whose length is neither the parameter's number of components nor (vertex_positions) 3,
+    // and a large-steps parameterization of anything but a vertex_positions, with bounds or with a mask of
+    // more than 3 components (it acts on each coordinate column separately, so a per-column mask commutes
+    // with it).
     InverseProblem(Scene& scene, const std::vector<OptimizedParameter>& parameters);
     ~InverseProblem();
 
