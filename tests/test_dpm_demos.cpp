@@ -41,8 +41,8 @@ OptimizeConfig reduced(const std::string& config_path, const Reduction& r, const
 } // namespace
 
 // DPM-C with the L2 loss recovers the area light's height above the glass egg from the caustic, 0.4 units off
-// at the start (32², 20,000 photons, 8 + 8 passes, twice the rates, 40 iterations: final errors 0.012-0.085
-// over test seeds 0-5, 16-19 s at load 5.7 on 2 cores; the last steps' gradient noise sets the spread).
+// at the start (32², 20,000 photons, 8 + 8 passes, twice the rates, 40 iterations: final errors 0.008-0.037
+// over test seeds 0-5, 10-19 s on the 2 shared cores; the last steps' gradient noise sets the spread).
 TEST(DpmDemos, EggRecoversTheLightHeight) {
     const OptimizeConfig config =
         reduced("egg/config_dpm_c.json", {32, 20000, 40, 0, 2.0}, "penumbra_test_dpm_egg");
@@ -52,17 +52,8 @@ TEST(DpmDemos, EggRecoversTheLightHeight) {
     std::printf("  translation error %.4g -> %.4g, %.1f s\n", first, result.final_translation_error,
                 result.seconds);
     EXPECT_EQ(result.method, "dpm-c");
-    EXPECT_LT(result.final_translation_error, first / 3);
+    EXPECT_LT(result.final_translation_error, first / 4);
     fs::remove_all(config.output);
-}
-
-// The bundled DPM-G configuration with the matching loss (Eq. 25) approaches the true height and then drifts
-// away from it: at 32², 10,000 photons, 4 + 4 passes, all pixels, twice the rates, the translation error
-// went 0.4 -> 0.052 (iteration 10) -> 0.139 (iteration 25) at seed 1 and 0.4 -> 0.062 -> 0.098 at seed 1001;
-// at 64² (the configuration, 60 iterations) 0.4 -> 0.025 (iteration 20) -> 0.068. The matching loss of a
-// few-pass SPPM image against a converged target is not minimal at the true height (docs/dpm-demos.md).
-TEST(DpmDemos, EggMatchingLossRecoversTheLightHeight) {
-    GTEST_SKIP() << "the matching loss drifts away from the true height (numbers above)";
 }
 
 // DPM-C with the L2 loss recovers the liquid's colour (specular_transmittance) from its coloured caustic
