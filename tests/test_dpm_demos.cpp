@@ -1,10 +1,14 @@
 // The DPM inverse-rendering demos (scenes/dpm/egg, scenes/dpm/wine; docs/dpm-demos.md) at a reduced size:
 // each bundled configuration must recover its parameter from a wrong start.
+#include "diff/dpm.h"
+#include "diff/method.h"
 #include "diff_cases.h"
 #include "optim/optimize.h"
+#include "render/render.h"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -70,4 +74,39 @@ TEST(DpmDemos, WineRecoversTheLiquidColour) {
     EXPECT_EQ(result.method, "dpm-c");
     EXPECT_LT(result.final_parameter_error, first / 4);
     fs::remove_all(config.output);
+}
+
+// At the egg's solution (light at height 1.6, the target rendered there with 128 passes), the matching loss's
+// gradient along the light's height must vanish: over 16 seeds its mean within 4 standard errors of 0 (t with
+// 15 dof). Measured here (32², 8 passes, all pixels, 10-13 s): DPM-G −0.0216 ± 0.0029 (fails); DPM-C, the
+// same test with DpmVariant::C, −0.0083 ± 0.0056 (passes). At 64² with the configuration's settings DPM-G
+// gave −0.0206 ± 0.0014 (12 seeds) while its L2 gradient is zero within the noise (+0.0025 ± 0.0032): the
+// bias is in the screen-space motion term, and it drives scenes/dpm/egg/config.json away from the solution
+// after ~25 iterations (docs/dpm-demos.md).
+TEST(DpmDemos, EggMatchingGradientVanishesAtTheSolution) {
+    GTEST_SKIP() << "DPM-G's matching gradient is biased at the solution (numbers above)";
+    const std::map<std::string, std::string> defines = {
+        {"res", "32"}, {"photons", "20000"}, {"radius", "0.012"}, {"light_y", "1.6"}};
+    auto scene = load_scene(dpm_dir + "egg/scene.xml", defines);
+    RenderOptions target_options;
+    target_options.spp = 128;
+    target_options.seed = 99 + 1000 * test::test_seed();
+    const Image target = render(*scene, target_options);
+    Parameters params(*scene);
+    params.enable({parse_param_selection("light.translate=0,1,0")});
+    const int seeds = 16;
+    double sum = 0, sum2 = 0;
+    for (int k = 0; k < seeds; ++k) {
+        DpmOptions options;
+        options.variant = DpmVariant::G;
+        options.spp = 8;
+        options.pixel_fraction = 1;
+        options.seed = 1 + k + 1000 * test::test_seed();
+        const double g = dpm_matching_gradient(*scene, params, target, options).gradient.values.at(0);
+        sum += g;
+        sum2 += g * g;
+    }
+    const double mean = sum / seeds, se = std::sqrt((sum2 / seeds - mean * mean) / (seeds - 1));
+    std::printf("  dL/dy at the solution: %.4g +- %.4g\n", mean, se);
+    EXPECT_LT(std::abs(mean), 4 * se);
 }
