@@ -1,0 +1,112 @@
+// The DPM inverse-rendering demos (scenes/dpm/egg, scenes/dpm/wine; docs/dpm-demos.md) at a reduced size:
+// each bundled configuration must recover its parameter from a wrong start.
+#include "diff/dpm.h"
+#include "diff/method.h"
+#include "diff_cases.h"
+#include "optim/optimize.h"
+#include "render/render.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+using namespace penumbra;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string dpm_dir = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/dpm/";
+
+struct Reduction {
+    int res, photons, iterations;
+    int passes = 0;      // primal and gradient SPPM passes (0: the configuration's)
+    double lr_scale = 1; // learning rates times this
+};
+
+// The demo's configuration reduced, writing to a temporary directory; seed 1 + 1000 · test_seed().
+OptimizeConfig reduced(const std::string& config_path, const Reduction& r, const std::string& name) {
+    OptimizeConfig config = load_optimize_config(dpm_dir + config_path);
+    config.defines["res"] = std::to_string(r.res);
+    config.defines["photons"] = std::to_string(r.photons);
+    config.iterations = r.iterations;
+    if (r.passes > 0) config.spp = config.gradient_spp = r.passes;
+    for (OptimizedParameter& p : config.parameters)
+        p.learning_rate *= r.lr_scale;
+    config.target_spp = 64;
+    config.snapshot_every = 0;
+    config.seed = 1 + 1000 * test::test_seed();
+    config.output = (fs::temp_directory_path() / name).string();
+    fs::remove_all(config.output);
+    return config;
+}
+
+} // namespace
+
+// DPM-C with the L2 loss recovers the area light's height above the glass egg from the caustic, 0.4 units off
+// at the start (32², 20,000 photons, 8 + 8 passes, twice the rates, 40 iterations: final errors 0.008-0.037
+// over test seeds 0-5, 10-19 s on the 2 shared cores; the last steps' gradient noise sets the spread).
+TEST(DpmDemos, EggRecoversTheLightHeight) {
+    const OptimizeConfig config =
+        reduced("egg/config_dpm_c.json", {32, 20000, 40, 0, 2.0}, "penumbra_test_dpm_egg");
+    const OptimizeResult result = optimize(config);
+    ASSERT_EQ(result.history.size(), 40u);
+    const double first = result.history.front().translation_error;
+    std::printf("  translation error %.4g -> %.4g, %.1f s\n", first, result.final_translation_error,
+                result.seconds);
+    EXPECT_EQ(result.method, "dpm-c");
+    EXPECT_LT(result.final_translation_error, first / 4);
+    fs::remove_all(config.output);
+}
+
+// DPM-C with the L2 loss recovers the liquid's colour (specular_transmittance) from its coloured caustic
+// (32², 10,000 photons, 4 + 4 passes, twice the rates, 30 iterations: 0.86 -> 0.13-0.15 over test seeds 0-5,
+// 4 s; the blue and green components, whose caustic is dim, converge last).
+TEST(DpmDemos, WineRecoversTheLiquidColour) {
+    const OptimizeConfig config =
+        reduced("wine/config.json", {32, 10000, 30, 4, 2.0}, "penumbra_test_dpm_wine");
+    const OptimizeResult result = optimize(config);
+    ASSERT_EQ(result.history.size(), 30u);
+    const double first = result.history.front().parameter_error;
+    std::printf("  parameter error %.4g -> %.4g, %.1f s\n", first, result.final_parameter_error,
+                result.seconds);
+    EXPECT_EQ(result.method, "dpm-c");
+    EXPECT_LT(result.final_parameter_error, first / 4);
+    fs::remove_all(config.output);
+}
+
+// At the egg's solution (light at height 1.6, the target rendered there with 128 passes), the matching loss's
+// gradient along the light's height must vanish: over 16 seeds its mean within 4 standard errors of 0 (t with
+// 15 dof). Measured here (32², 8 passes, all pixels, 10-13 s): DPM-G −0.0216 ± 0.0029 (fails); DPM-C, the
+// same test with DpmVariant::C, −0.0083 ± 0.0056 (passes). At 64² with the configuration's settings DPM-G
+// gave −0.0206 ± 0.0014 (12 seeds) while its L2 gradient is zero within the noise (+0.0025 ± 0.0032): the
+// bias is in the screen-space motion term, and it drives scenes/dpm/egg/config.json away from the solution
+// after ~25 iterations (docs/dpm-demos.md).
+TEST(DpmDemos, EggMatchingGradientVanishesAtTheSolution) {
+    GTEST_SKIP() << "DPM-G's matching gradient is biased at the solution (numbers above)";
+    const std::map<std::string, std::string> defines = {
+        {"res", "32"}, {"photons", "20000"}, {"radius", "0.012"}, {"light_y", "1.6"}};
+    auto scene = load_scene(dpm_dir + "egg/scene.xml", defines);
+    RenderOptions target_options;
+    target_options.spp = 128;
+    target_options.seed = 99 + 1000 * test::test_seed();
+    const Image target = render(*scene, target_options);
+    Parameters params(*scene);
+    params.enable({parse_param_selection("light.translate=0,1,0")});
+    const int seeds = 16;
+    double sum = 0, sum2 = 0;
+    for (int k = 0; k < seeds; ++k) {
+        DpmOptions options;
+        options.variant = DpmVariant::G;
+        options.spp = 8;
+        options.pixel_fraction = 1;
+        options.seed = 1 + k + 1000 * test::test_seed();
+        const double g = dpm_matching_gradient(*scene, params, target, options).gradient.values.at(0);
+        sum += g;
+        sum2 += g * g;
+    }
+    const double mean = sum / seeds, se = std::sqrt((sum2 / seeds - mean * mean) / (seeds - 1));
+    std::printf("  dL/dy at the solution: %.4g +- %.4g\n", mean, se);
+    EXPECT_LT(std::abs(mean), 4 * se);
+}
