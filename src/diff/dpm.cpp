@@ -273,10 +273,17 @@ DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, 
         scene, params, o, 0, uint64_t(o.spp), nullptr,
         [&](uint64_t pixel, const Color3f& l) { primal.pixels[pixel] += l * inv; }, [](const PathSample&) {},
         false);
+    // Debiased (the Sinkhorn divergence's gradient, GeomLoss's default): the entropic plan's barycentric
+    // projection T_IT shrinks toward local means, so each pixel is pulled toward x + T_IT(x) − T_II(x), with
+    // T_II the image matched to itself; at I = T the pull vanishes.
     const ScreenSamples pixels = image_samples(primal);
-    const MatchingLossResult loss =
-        matching_loss(pixels, match_to_image(pixels, Eigen::VectorXd::Ones(pixels.position.rows()), target,
-                                               o.matching));
+    const Eigen::VectorXd uniform = Eigen::VectorXd::Ones(pixels.position.rows());
+    const ScreenSamples to_target = match_to_image(pixels, uniform, target, o.matching);
+    const ScreenSamples to_self = match_to_image(pixels, uniform, primal, o.matching);
+    ScreenSamples matched = pixels;
+    matched.position += to_target.position - to_self.position;
+    matched.colour += to_target.colour - to_self.colour;
+    const MatchingLossResult loss = matching_loss(pixels, matched);
 
     // Second run: each sampled path estimates its pixel's dI/dθ (its value's scale) and dp/dθ (its screen
     // motion, weighted by its share of the pixel's samples: the pixel fraction, paths, EPSMs and passes).
@@ -284,8 +291,10 @@ DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, 
     tbb::enumerable_thread_specific<ReverseSweep> sweeps([dim] { return ReverseSweep(dim); });
     const float shares = float(o.pixel_fraction) * float(o.paths) * float(o.variant == DpmVariant::C ? 1 : 2) *
                          float(o.spp);
+    DpmOptions independent = o;
+    independent.seed = o.seed ^ 0x632be59bd9b4e019ULL;
     for_each_path(
-        scene, params, o, 0, uint64_t(o.spp), o.progress, [](uint64_t, const Color3f&) {},
+        scene, params, independent, 0, uint64_t(o.spp), o.progress, [](uint64_t, const Color3f&) {},
         [&](const PathSample& s) {
             const Eigen::Index i = Eigen::Index(s.pixel);
             ReverseSweep& sweep = sweeps.local();
