@@ -51,9 +51,9 @@ TEST(Method, RegistryListsTheMethodsWithPsdrFirst) {
     std::vector<std::string> names;
     for (const MethodInfo& m : derivative_methods())
         names.push_back(m.name);
-    EXPECT_EQ(names, (std::vector<std::string>{"psdr", "interior", "paths", "was", "war", "war-bdpt"}));
+    EXPECT_EQ(names, (std::vector<std::string>{"psdr", "interior", "paths", "was", "war", "war-bdpt", "dpm-c", "dpm-g"}));
     EXPECT_NE(std::string(error_of("nope", {}))
-                  .find("unknown method 'nope' (known methods: psdr, interior, paths, was, war, war-bdpt)"),
+                  .find("unknown method 'nope' (known methods: psdr, interior, paths, was, war, war-bdpt, dpm-c, dpm-g)"),
               std::string::npos);
 }
 
