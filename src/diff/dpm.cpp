@@ -82,12 +82,8 @@ void for_each_path(const Scene& scene, const Parameters& params, const DpmOption
                 for (int x = x0; x < x1; ++x) {
                     check_interrupt();
                     const uint64_t pixel = uint64_t(y) * film.width + x;
-                    sampler.start(o.seed, pixel, pass);
-                    const Vec2f pos = film.sample_position(x, y, sampler.next_2d());
-                    const auto [ray, weight] = sensor.sample_ray(pos, sampler.next_2d());
-                    Color3f emission(0.f);
-                    const VisiblePoint vp =
-                        trace_visible_point(scene, sampler, ray, weight, eye, emission, rays, &chain);
+                    const auto [vp, ray, pos, emission] =
+                        trace_pixel_visible_point(scene, sampler, x, y, o.seed, pass, eye, rays, &chain);
                     if (!vp.valid() || !is_finite(vp.beta)) {
                         if (is_finite(emission)) primal(pixel, emission);
                         continue;

@@ -112,12 +112,8 @@ std::vector<Layer> SPPMIntegrator::render(const Scene& scene, const RenderOption
             for (int y = y0; y < y1; ++y)
                 for (int x = x0; x < x1; ++x) {
                     const size_t pixel = size_t(y) * width + x;
-                    sampler.start(options.seed, pixel, pass);
-                    const Vec2f pos = film.sample_position(x, y, sampler.next_2d());
-                    const auto [ray, weight] = sensor.sample_ray(pos, sampler.next_2d());
-                    Color3f emission(0.f);
-                    VisiblePoint vp =
-                        trace_visible_point(scene, sampler, ray, weight, eye, emission, counter);
+                    auto [vp, ray, pos, emission] =
+                        trace_pixel_visible_point(scene, sampler, x, y, options.seed, pass, eye, counter);
                     if (!is_finite(emission) || !is_finite(vp.beta)) {
                         ++local_dropped;
                         vp = {};

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <tuple>
 
 namespace penumbra {
 
@@ -45,6 +46,21 @@ VisiblePoint trace_visible_point(const Scene& scene, Sampler& sampler, Ray ray, 
         }
     }
     return {};
+}
+
+PixelVisiblePoint trace_pixel_visible_point(const Scene& scene, Sampler& sampler, int x, int y, uint64_t seed,
+                                            uint64_t pass, const EyeSubpathSettings& settings, RayCounter& rays,
+                                            std::vector<SpecularVertex>* chain) {
+    const Sensor& sensor = *scene.sensor;
+    const Film& film = *sensor.film;
+    sampler.start(seed, uint64_t(y) * uint64_t(film.width) + uint64_t(x), pass);
+    PixelVisiblePoint out;
+    out.film = film.sample_position(x, y, sampler.next_2d());
+    Color3f weight;
+    std::tie(out.ray, weight) = sensor.sample_ray(out.film, sampler.next_2d());
+    out.emission = Color3f(0.f);
+    out.vp = trace_visible_point(scene, sampler, out.ray, weight, settings, out.emission, rays, chain);
+    return out;
 }
 
 } // namespace penumbra

@@ -35,4 +35,17 @@ VisiblePoint trace_visible_point(const Scene& scene, Sampler& sampler, Ray ray, 
                                  const EyeSubpathSettings& settings, Color3f& emission, RayCounter& rays,
                                  std::vector<SpecularVertex>* chain = nullptr);
 
+// The eye subpath of pass `pass` in pixel (x, y): the sampler started at (seed, pixel, pass) gives the film
+// position and the lens sample, then trace_visible_point. The one sequence of random numbers sppm traces and
+// the differentiable photon-mapping estimators (diff/dpm.h) re-trace.
+struct PixelVisiblePoint {
+    VisiblePoint vp;
+    Ray ray;          // the primary ray
+    Vec2f film;       // its film position (pixels)
+    Color3f emission; // the emission the subpath reached
+};
+PixelVisiblePoint trace_pixel_visible_point(const Scene& scene, Sampler& sampler, int x, int y, uint64_t seed,
+                                            uint64_t pass, const EyeSubpathSettings& settings, RayCounter& rays,
+                                            std::vector<SpecularVertex>* chain = nullptr);
+
 } // namespace penumbra
