@@ -3,6 +3,7 @@
 #pragma once
 #include "core/image.h"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -17,11 +18,16 @@ public:
             sum_.assign(image.pixels.size(), Vec3d(0.0));
             sum2_.assign(image.pixels.size(), Vec3d(0.0));
         }
+        double mean = 0;
         for (size_t i = 0; i < image.pixels.size(); ++i) {
             const Vec3d v(image.pixels[i]);
             sum_[i] += v;
             sum2_[i] += v * v;
+            mean += v.x + v.y + v.z;
         }
+        mean /= 3.0 * double(image.pixels.size());
+        mean_sum_ += mean;
+        mean_sum2_ += mean * mean;
         ++count_;
     }
     int count() const { return count_; }
@@ -44,9 +50,18 @@ public:
         return s;
     }
 
+    // Standard error of the image mean (over pixels and channels) from the spread of the batches' means: unlike
+    // sqrt(Σσ²)/N it holds when pixel errors correlate (samples shared by pixels, e.g. photons). 0 below 2.
+    double mean_standard_error() const {
+        if (count_ < 2) return 0.0;
+        const double n = count_, m = mean_sum_ / n;
+        return std::sqrt(std::max(0.0, (mean_sum2_ / n - m * m) * (n / (n - 1.0))) / n);
+    }
+
 private:
     int width_ = 0, height_ = 0, count_ = 0;
     std::vector<Vec3d> sum_, sum2_;
+    double mean_sum_ = 0, mean_sum2_ = 0;
 };
 
 } // namespace penumbra

@@ -157,13 +157,6 @@ std::vector<double> total(const tbb::enumerable_thread_specific<ReverseSweep>& s
     return sum;
 }
 
-// The mean over pixels and channels.
-double channel_mean(const Image& image) {
-    double sum = 0;
-    for (const Color3f& c : image.pixels) sum += double(c.x) + c.y + c.z;
-    return sum / (3.0 * double(image.pixels.size()));
-}
-
 double seconds_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -176,7 +169,6 @@ DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const
     const Film& film = *scene.sensor->film;
     const bool screen = o.variant == DpmVariant::G;
     ImageBatches primal_batches, derivative_batches, x_batches, y_batches;
-    std::vector<double> means;
     for (int b = 0; b < o.batches; ++b) {
         Image primal(film.width, film.height), derivative(film.width, film.height);
         Image motion_x(film.width, film.height), motion_y(film.width, film.height);
@@ -204,7 +196,6 @@ DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const
             });
         primal_batches.add(primal);
         derivative_batches.add(derivative);
-        means.push_back(channel_mean(derivative));
         if (screen) {
             x_batches.add(motion_x);
             y_batches.add(motion_y);
@@ -220,12 +211,7 @@ DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const
         out.screen_x_stderr = x_batches.standard_error();
         out.screen_y_stderr = y_batches.standard_error();
     }
-    if (means.size() > 1) {
-        double m = 0, v = 0;
-        for (double x : means) m += x / double(means.size());
-        for (double x : means) v += (x - m) * (x - m) / double(means.size() - 1);
-        out.mean_stderr = std::sqrt(v / double(means.size()));
-    }
+    out.mean_stderr = derivative_batches.mean_standard_error();
     out.image.seconds = seconds_since(start);
     return out;
 }
