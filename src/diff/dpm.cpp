@@ -2,6 +2,7 @@
 
 #include "core/batch_stats.h"
 #include "core/interrupt.h"
+#include "core/seconds.h"
 #include "diff/material_form.h"
 #include "diff/photon_path.h"
 #include "diff/pixel_driver.h"
@@ -155,10 +156,6 @@ std::vector<double> total(const tbb::enumerable_thread_specific<ReverseSweep>& s
     for (const ReverseSweep& s : sweeps)
         for (size_t k = 0; k < dim; ++k) sum[k] += s.gradient[k];
     return sum;
-}
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 } // namespace

@@ -2,6 +2,7 @@
 
 #include "core/batch_stats.h"
 #include "core/interrupt.h"
+#include "core/seconds.h"
 #include "diff/adaptive_pixels.h"
 #include "render/tiles.h"
 
@@ -116,10 +117,6 @@ uint64_t batch_seed(uint64_t seed, int batch) { return seed + 0x9E3779B97F4A7C15
 std::function<void(float)> batch_progress(const PathSamplingOptions& o, int batch) {
     if (!o.progress) return nullptr;
     return [&o, batch](float f) { o.progress((float(batch) + f) / float(o.batches)); };
-}
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void check_size(const Scene& scene, const Image& image, const char* what) {

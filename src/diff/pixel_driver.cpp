@@ -2,6 +2,7 @@
 
 #include "core/batch_stats.h"
 #include "core/interrupt.h"
+#include "core/seconds.h"
 #include "render/tiles.h"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -12,10 +13,6 @@ namespace {
 
 bool finite(const Color3<Var>& c) {
     return std::isfinite(c.x.v) && std::isfinite(c.y.v) && std::isfinite(c.z.v);
-}
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 class StatelessTile final : public TileSamples {
