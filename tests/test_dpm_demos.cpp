@@ -42,53 +42,44 @@ OptimizeConfig reduced(const std::string& config_path, const Reduction& r, const
     return config;
 }
 
+// The reduced configuration's optimization: its error (a pose's translation error, else the parameter error)
+// must end below a quarter of where it started, with the configuration's method.
+void expect_recovers(const std::string& config_path, const Reduction& r, const std::string& name,
+                     const std::string& method, bool pose) {
+    const OptimizeConfig config = reduced(config_path, r, name);
+    const OptimizeResult result = optimize(config);
+    ASSERT_EQ(result.history.size(), size_t(r.iterations));
+    const IterationRecord& start = result.history.front();
+    const double first = pose ? start.translation_error : start.parameter_error;
+    const double last = pose ? result.final_translation_error : result.final_parameter_error;
+    std::printf("  %s error %.4g -> %.4g, %.1f s\n", pose ? "translation" : "parameter", first, last,
+                result.seconds);
+    EXPECT_EQ(result.method, method);
+    EXPECT_LT(last, first / 4);
+    fs::remove_all(config.output);
+}
+
 } // namespace
 
 // DPM-C with the L2 loss recovers the area light's height above the glass egg from the caustic, 0.4 units off
 // at the start (32², 20,000 photons, 8 + 8 passes, twice the rates, 40 iterations: final errors 0.008-0.037
 // over test seeds 0-5, 10-19 s on the 2 shared cores; the last steps' gradient noise sets the spread).
 TEST(DpmDemos, EggRecoversTheLightHeight) {
-    const OptimizeConfig config =
-        reduced("egg/config_dpm_c.json", {32, 20000, 40, 0, 2.0}, "penumbra_test_dpm_egg");
-    const OptimizeResult result = optimize(config);
-    ASSERT_EQ(result.history.size(), 40u);
-    const double first = result.history.front().translation_error;
-    std::printf("  translation error %.4g -> %.4g, %.1f s\n", first, result.final_translation_error,
-                result.seconds);
-    EXPECT_EQ(result.method, "dpm-c");
-    EXPECT_LT(result.final_translation_error, first / 4);
-    fs::remove_all(config.output);
+    expect_recovers("egg/config_dpm_c.json", {32, 20000, 40, 0, 2.0}, "penumbra_test_dpm_egg", "dpm-c", true);
 }
 
 // DPM-G with the matching loss (the demo's own configuration, scenes/dpm/egg/config.json) recovers the height
 // too (32², 20,000 photons, 4 + 4 passes, twice the rate, 30 iterations: 0.4 -> 0.015, 0.058, 0.0063 over test
 // seeds 0-2, 10-21 s on the loaded 2 cores; with 8 + 8 passes and 40 iterations 0.012-0.020).
 TEST(DpmDemos, EggRecoversTheLightHeightWithTheMatchingLoss) {
-    const OptimizeConfig config = reduced("egg/config.json", {32, 20000, 30, 4, 2.0}, "penumbra_test_dpm_egg_g");
-    const OptimizeResult result = optimize(config);
-    ASSERT_EQ(result.history.size(), 30u);
-    const double first = result.history.front().translation_error;
-    std::printf("  translation error %.4g -> %.4g, %.1f s\n", first, result.final_translation_error,
-                result.seconds);
-    EXPECT_EQ(result.method, "dpm-g");
-    EXPECT_LT(result.final_translation_error, first / 4);
-    fs::remove_all(config.output);
+    expect_recovers("egg/config.json", {32, 20000, 30, 4, 2.0}, "penumbra_test_dpm_egg_g", "dpm-g", true);
 }
 
 // DPM-C with the L2 loss recovers the liquid's colour (specular_transmittance) from its coloured caustic
 // (32², 10,000 photons, 4 + 4 passes, twice the rates, 30 iterations: 0.86 -> 0.13-0.15 over test seeds 0-5,
 // 4 s; the blue and green components, whose caustic is dim, converge last).
 TEST(DpmDemos, WineRecoversTheLiquidColour) {
-    const OptimizeConfig config =
-        reduced("wine/config.json", {32, 10000, 30, 4, 2.0}, "penumbra_test_dpm_wine");
-    const OptimizeResult result = optimize(config);
-    ASSERT_EQ(result.history.size(), 30u);
-    const double first = result.history.front().parameter_error;
-    std::printf("  parameter error %.4g -> %.4g, %.1f s\n", first, result.final_parameter_error,
-                result.seconds);
-    EXPECT_EQ(result.method, "dpm-c");
-    EXPECT_LT(result.final_parameter_error, first / 4);
-    fs::remove_all(config.output);
+    expect_recovers("wine/config.json", {32, 10000, 30, 4, 2.0}, "penumbra_test_dpm_wine", "dpm-c", false);
 }
 
 // At the egg's solution (light at height 1.6, the target rendered there with 128 passes), the matching loss's
