@@ -24,15 +24,12 @@ A1, A2 = 0.0030, 0.0012  # amplitudes: smooth focusing, no caustic folds on the 
 OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "slab_top.obj")
 
 
-def height_field(half, grid):
-    """Vertices, unit upward normals and faces whose (counter-clockwise seen from above) normals face +y."""
-    t = np.linspace(-half, half, grid + 1)
-    x, z = np.meshgrid(t, t, indexing="xy")
-    h = A1 * np.cos(K * x + 0.3) * np.cos(K * z + 0.7) + A2 * np.sin(1.7 * K * x - 1.1 * K * z)
-    diagonal = np.cos(1.7 * K * x - 1.1 * K * z)
-    hx = -A1 * K * np.sin(K * x + 0.3) * np.cos(K * z + 0.7) + A2 * 1.7 * K * diagonal
-    hz = -A1 * K * np.cos(K * x + 0.3) * np.sin(K * z + 0.7) - A2 * 1.1 * K * diagonal
-    v = np.stack([x, BASE + h, z], axis=-1).reshape(-1, 3)
+def height_field_mesh(x, z, h, hx, hz, base):
+    """The mesh of y = base + h(x, z) sampled on a square grid (x, z from np.meshgrid(t, t, indexing="xy")) with
+    the gradient (hx, hz): vertices, exact unit normals (-h_x, 1, -h_z) / |.| and faces whose
+    (counter-clockwise seen from above) normals face +y."""
+    grid = x.shape[0] - 1
+    v = np.stack([x, base + h, z], axis=-1).reshape(-1, 3)
     n = np.stack([-hx, np.ones_like(h), -hz], axis=-1).reshape(-1, 3)
     n /= np.linalg.norm(n, axis=1, keepdims=True)
     faces = []
@@ -42,6 +39,17 @@ def height_field(half, grid):
             b, c, d = a + 1, a + grid + 1, a + grid + 2
             faces += [(a, d, b), (a, c, d)]  # (b - a) x (d - a) = +x x (+x +z) points to -y: reversed
     return v, n, np.array(faces, dtype=np.int64)
+
+
+def height_field(half, grid):
+    """This slab's bumpy top face (height_field_mesh of two products of cosines and a diagonal sine)."""
+    t = np.linspace(-half, half, grid + 1)
+    x, z = np.meshgrid(t, t, indexing="xy")
+    h = A1 * np.cos(K * x + 0.3) * np.cos(K * z + 0.7) + A2 * np.sin(1.7 * K * x - 1.1 * K * z)
+    diagonal = np.cos(1.7 * K * x - 1.1 * K * z)
+    hx = -A1 * K * np.sin(K * x + 0.3) * np.cos(K * z + 0.7) + A2 * 1.7 * K * diagonal
+    hz = -A1 * K * np.cos(K * x + 0.3) * np.sin(K * z + 0.7) - A2 * 1.1 * K * diagonal
+    return height_field_mesh(x, z, h, hx, hz, BASE)
 
 
 if __name__ == "__main__":

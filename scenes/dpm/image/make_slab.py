@@ -20,6 +20,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from make_reflector import write_obj  # noqa: E402
+from make_slab import height_field_mesh  # noqa: E402
 
 BASE = 2.2  # height of the flat top face (the bottom face is at y = 2)
 HALF = 1.0  # half side of the face
@@ -38,7 +39,7 @@ DIR = os.path.dirname(os.path.abspath(__file__))
 
 
 def height_field(bumps):
-    """Vertices, upward normals and faces whose (counter-clockwise seen from above) normals face +y."""
+    """The top face with Gaussian bumps (height_field_mesh of scenes/dpm/make_slab.py)."""
     t = np.linspace(-HALF, HALF, GRID + 1)
     x, z = np.meshgrid(t, t, indexing="xy")
     h = np.zeros_like(x)
@@ -48,16 +49,7 @@ def height_field(bumps):
         h += g
         hx -= g * (x - cx) / (s * s)
         hz -= g * (z - cz) / (s * s)
-    v = np.stack([x, BASE + h, z], axis=-1).reshape(-1, 3)
-    n = np.stack([-hx, np.ones_like(h), -hz], axis=-1).reshape(-1, 3)
-    n /= np.linalg.norm(n, axis=1, keepdims=True)
-    faces = []
-    for j in range(GRID):
-        for i in range(GRID):
-            a = j * (GRID + 1) + i  # (x_i, z_j)
-            b, c, d = a + 1, a + GRID + 1, a + GRID + 2
-            faces += [(a, d, b), (a, c, d)]
-    return v, n, np.array(faces, dtype=np.int64)
+    return height_field_mesh(x, z, h, hx, hz, BASE)
 
 
 def ring_image():
