@@ -267,3 +267,29 @@ TEST(MatchingLoss, ImageMatchingFollowsAMovedSquare) {
     const MatchingLossResult loss = matching_loss(source, matched);
     EXPECT_LT(loss.d_position(3 * 8 + 2, 0), 0);
 }
+
+// The debiased matching (match_image_debiased): an image matched to itself stays where it is (the self term
+// cancels the entropic shrinkage exactly), and the moved square above (now on a graded background) is still
+// matched to its position + (2/8, 0).
+TEST(MatchingLoss, DebiasedMatchingVanishesAtTheTargetAndFollowsAMovedSquare) {
+    Image rendered(8, 8), target(8, 8);
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) rendered.at(x, y) = target.at(x, y) = Color3f(0.05f * float(x + y));
+    for (int y = 3; y < 5; ++y)
+        for (int x = 2; x < 4; ++x) {
+            rendered.at(x, y) = Color3f(1.f);
+            target.at(x + 2, y) = Color3f(1.f);
+        }
+    SinkhornOptions o;
+    o.tolerance = 1e-8;
+    const ScreenSamples source = image_samples(rendered);
+    const ScreenSamples self = match_image_debiased(rendered, rendered, o);
+    EXPECT_EQ((self.position - source.position).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ((self.colour - source.colour).cwiseAbs().maxCoeff(), 0.0);
+    const ScreenSamples moved = match_image_debiased(rendered, target, o);
+    for (int y = 3; y < 5; ++y)
+        for (int x = 2; x < 4; ++x) {
+            const int i = y * 8 + x;
+            EXPECT_NEAR(moved.position(i, 0), source.position(i, 0) + 2.0 / 8, 1e-6) << x << "," << y;
+        }
+}

@@ -252,16 +252,9 @@ DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, 
         scene, params, o, 0, uint64_t(o.spp), nullptr,
         [&](uint64_t pixel, const Color3f& l) { primal.pixels[pixel] += l * inv; }, [](const PathSample&) {},
         false);
-    // Debiased (the Sinkhorn divergence's gradient, GeomLoss's default): the entropic plan's barycentric
-    // projection T_IT shrinks toward local means, so each pixel is pulled toward x + T_IT(x) − T_II(x), with
-    // T_II the image matched to itself; at I = T the pull vanishes.
+    // Debiased (optim/matching_loss.h: at I = T the pull vanishes).
     const ScreenSamples pixels = image_samples(primal);
-    const Eigen::VectorXd uniform = Eigen::VectorXd::Ones(pixels.position.rows());
-    const ScreenSamples to_target = match_to_image(pixels, uniform, target, o.matching);
-    const ScreenSamples to_self = match_to_image(pixels, uniform, primal, o.matching);
-    ScreenSamples matched = pixels;
-    matched.position += to_target.position - to_self.position;
-    matched.colour += to_target.colour - to_self.colour;
+    const ScreenSamples matched = match_image_debiased(primal, target, o.matching);
     const MatchingLossResult loss = matching_loss(pixels, matched);
 
     // Second run: each sampled path estimates its pixel's dI/dθ (its value's scale) and dp/dθ (its screen

@@ -68,4 +68,15 @@ ScreenSamples match_to_image(const ScreenSamples& samples, const Eigen::VectorXd
     return {r.matched.rightCols<2>(), r.matched.leftCols<3>()};
 }
 
+ScreenSamples match_image_debiased(const Image& image, const Image& target, const SinkhornOptions& options) {
+    const ScreenSamples pixels = image_samples(image);
+    const Eigen::VectorXd uniform = Eigen::VectorXd::Ones(pixels.position.rows());
+    const ScreenSamples to_target = match_to_image(pixels, uniform, target, options);
+    const ScreenSamples to_self = match_to_image(pixels, uniform, image, options);
+    ScreenSamples matched = pixels;
+    matched.position += to_target.position - to_self.position;
+    matched.colour += to_target.colour - to_self.colour;
+    return matched;
+}
+
 } // namespace penumbra

@@ -39,4 +39,10 @@ Points5 matching_points(const ScreenSamples& samples);
 ScreenSamples match_to_image(const ScreenSamples& samples, const Eigen::VectorXd& weights,
                              const Image& target, const SinkhornOptions& options = {});
 
+// The debiased pixel-to-pixel matching of an image to a target (the gradient of GeomLoss's Sinkhorn divergence,
+// its default): the entropic plan's barycentric projection T_IT shrinks toward local means, so each pixel x of
+// `image` is matched to x + T_IT(x) − T_II(x), T_II the image matched to itself (uniform weights); at
+// image = target the match is the pixel itself.
+ScreenSamples match_image_debiased(const Image& image, const Image& target, const SinkhornOptions& options = {});
+
 } // namespace penumbra
