@@ -34,7 +34,8 @@ struct DpmOptions {
     double pixel_fraction = 1.0;
     int paths = 16;
     // The matching loss's optimal transport: GeomLoss's schedule (blur 0.01, ε-scaling 0.5, stop after the
-    // annealing), as the paper ran it; at 64² it takes 1.1 s against 4.3 s at scaling 0.9 (docs/dpm.md).
+    // annealing), as the paper ran it; a 64² gradient took 1.1 s against 4.3 s at scaling 0.9 (two runs on a
+    // loaded machine, indicative: docs/dpm.md).
     SinkhornOptions matching{0.01, 0.5, 1.0, 1e-3, 1};
     std::function<void(float)> progress;
 };
