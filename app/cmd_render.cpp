@@ -29,10 +29,10 @@ int cmd_render(const std::string& scene_path, const std::string& output, int spp
     // As in Mitsuba, surface integrators render a scene with media as if it had none: say so.
     const std::string& used = scene->integrator->plugin;
     if (scene_has_media(*scene) && used != "volpath" && used != "volpathmis" && used != "bdpt" && used != "ptracer" &&
-        used != "moment")
+        used != "sppm" && used != "moment")
         std::fprintf(stderr,
-                     "warning: integrator '%s' ignores the scene's participating media (volpath, volpathmis and "
-                     "bdpt render them)\n",
+                     "warning: integrator '%s' ignores the scene's participating media (volpath, volpathmis, "
+                     "bdpt and sppm render them)\n",
                      used.c_str());
     RenderOptions options;
     options.spp = spp;

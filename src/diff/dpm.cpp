@@ -70,7 +70,7 @@ void for_each_path(const Scene& scene, const Parameters& params, const DpmOption
     for (uint64_t k = 0; k < count; ++k) {
         const uint64_t pass = first + k;
         PhotonTracingStats stats;
-        map.build(trace_photons(scene, light, o.seed, pass, stats), radius);
+        map.build(trace_photons(scene, light, o.seed, pass, stats).surface, radius);
         for_each_tile(film.width, film.height, o.threads, [&](int x0, int y0, int x1, int y1) {
             Sampler sampler(*sensor.sampler, int(std::min<uint64_t>(first + count, kMaxSampleCount)));
             Sampler choice;

@@ -5,6 +5,7 @@
 #include "render/photon_map.h"
 #include "render/visible_point.h"
 #include "scene/bsdf.h"
+#include "scene/phase.h"
 
 #include <cmath>
 
@@ -45,6 +46,24 @@ inline PhotonGather gather_photons(const PhotonMap& map, const VisiblePoint& vp,
     for_each_merged_photon(map, vp, radius, kernel, max_depth, [&](const Photon& ph, float k, const Color3f& f) {
         g.count += k;
         g.flux += f * ph.flux * k;
+    });
+    g.flux *= vp.beta;
+    return g;
+}
+
+// Density estimation at a visible point in a medium: the volume photons within radius r (normalized over the
+// ball: Σ K Φ_p p(ω_eye, ω_p) / (4/3 π r³) estimates σ_s ∫ p L_i), with the medium's phase function.
+inline PhotonGather gather_volume_photons(const PhotonMap& map, const VisiblePoint& vp, float radius,
+                                          PhotonKernel kernel, int max_depth) {
+    PhotonGather g;
+    const PhaseFunction& phase = *vp.medium->phase;
+    const float inv_radius = 1.f / radius;
+    map.for_each_within(vp.p, radius, [&](const Photon& ph, float d2) {
+        if (max_depth >= 0 && vp.depth + int(ph.depth) > max_depth) return;
+        const float k = volume_photon_kernel(kernel, std::sqrt(d2) * inv_radius);
+        if (!(k > 0.f)) return;
+        g.count += k;
+        g.flux += ph.flux * (k * phase.eval(vp.wi, ph.wi));
     });
     g.flux *= vp.beta;
     return g;

@@ -17,4 +17,13 @@ template <typename T> T photon_kernel(PhotonKernel kernel, const T& t) {
     return T(3.5) * (T(1) - t3 * (T(10) - t * (T(15) - T(6) * t)));
 }
 
+// The same kernels normalized over the ball of radius r, for volume photons: ∫_ball K(|x| / r) / (4/3 π r³) dV
+// = 1. ∫₀¹ (1 - 6t⁵ + 15t⁴ - 10t³) 4πt² dt = 4π · 5/84, hence the factor 84/15 = 5.6.
+template <typename T> T volume_photon_kernel(PhotonKernel kernel, const T& t) {
+    if (!(t < T(1))) return T(0);
+    if (kernel == PhotonKernel::Constant) return T(1);
+    const T t3 = t * t * t;
+    return T(5.6) * (T(1) - t3 * (T(10) - t * (T(15) - T(6) * t)));
+}
+
 } // namespace penumbra

@@ -22,6 +22,12 @@ struct Photon {
     uint16_t depth; // segments of the light subpath (1: directly from the emitter)
 };
 
+// The photons of one pass: on surfaces with a non-delta BSDF, and at scattering events in media (volume
+// photons, n = 0: their flux carries the scattering coefficient σ_s at the event).
+struct PhotonSet {
+    std::vector<Photon> surface, volume;
+};
+
 class PhotonMap {
   public:
     // Builds the grid with cells of side `cell_size` (> 0); queries should use radii <= cell_size.

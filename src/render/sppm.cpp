@@ -83,8 +83,6 @@ PhotonTracingSettings photon_tracing_settings(const SPPMSettings& settings, int 
 
 std::vector<Layer> SPPMIntegrator::render(const Scene& scene, const RenderOptions& options,
                                           RenderStats& stats) const {
-    if (scene_has_media(scene))
-        throw Error("sppm: participating media are not supported (render them with volpath or bdpt)");
     const Sensor& sensor = *scene.sensor;
     const Film& film = *sensor.film;
     const int width = film.width, height = film.height;
@@ -95,12 +93,12 @@ std::vector<Layer> SPPMIntegrator::render(const Scene& scene, const RenderOption
 
     std::vector<SPPMPixel> pixels(size_t(width) * height);
     for (SPPMPixel& px : pixels)
-        px.radius = r0;
+        px.radius = px.volume_radius = r0;
     std::vector<VisiblePoint> points(pixels.size());
     const EyeSubpathSettings eye{s_.max_depth, s_.rr_depth};
     const PhotonTracingSettings light = photon_tracing_settings(s_, options.threads);
     std::atomic<uint64_t> rays{0}, dropped{0};
-    PhotonMap map;
+    PhotonMap map, volume_map;
     const auto start = std::chrono::steady_clock::now();
 
     for (uint64_t pass = 0; pass < passes; ++pass) {
@@ -128,43 +126,53 @@ std::vector<Layer> SPPMIntegrator::render(const Scene& scene, const RenderOption
 
         // Photon pass, then the grid with cells as large as the largest radius of a visible point.
         PhotonTracingStats photon_stats;
-        std::vector<Photon> photons = trace_photons(scene, light, options.seed, pass, photon_stats);
+        PhotonSet photons = trace_photons(scene, light, options.seed, pass, photon_stats);
         rays += photon_stats.rays;
-        float cell = 0.f;
-        for (size_t i = 0; i < pixels.size(); ++i)
-            if (points[i].valid()) cell = std::max(cell, pixels[i].radius);
-        if (cell > 0.f) {
-            map.build(std::move(photons), cell);
-            // Progressive radius reduction and flux correction (progressive photon mapping,
-            // Hachisuka et al. 2008, per pixel as in SPPM):
-            // N' = N + αM, R' = R √(N' / (N + M)), τ' = (τ + Φ) R'² / R².
+        float cell = 0.f, volume_cell = 0.f;
+        for (size_t i = 0; i < pixels.size(); ++i) {
+            if (points[i].in_medium()) volume_cell = std::max(volume_cell, pixels[i].volume_radius);
+            else if (points[i].valid()) cell = std::max(cell, pixels[i].radius);
+        }
+        if (cell > 0.f) map.build(std::move(photons.surface), cell);
+        if (volume_cell > 0.f) volume_map.build(std::move(photons.volume), volume_cell);
+        // Progressive radius reduction and flux correction (progressive photon mapping, Hachisuka et al.
+        // 2008, per pixel as in SPPM): N' = N + αM, R' = R (N' / (N + M))^(1/d), τ' = (τ + Φ) (R' / R)^d,
+        // d = 2 on surfaces, 3 in media.
+        if (cell > 0.f || volume_cell > 0.f)
             for_each_tile(width, height, options.threads, [&](int x0, int y0, int x1, int y1) {
                 for (int y = y0; y < y1; ++y)
                     for (int x = x0; x < x1; ++x) {
                         const size_t pixel = size_t(y) * width + x;
-                        if (!points[pixel].valid()) continue;
+                        const VisiblePoint& vp = points[pixel];
+                        if (!vp.valid()) continue;
                         SPPMPixel& px = pixels[pixel];
+                        const bool volume = vp.in_medium();
+                        float& radius = volume ? px.volume_radius : px.radius;
+                        float& count = volume ? px.volume_count : px.count;
+                        Color3f& tau = volume ? px.volume_tau : px.tau;
                         const PhotonGather g =
-                            gather_photons(map, points[pixel], px.radius, s_.kernel, s_.max_depth);
+                            volume ? gather_volume_photons(volume_map, vp, radius, s_.kernel, s_.max_depth)
+                                   : gather_photons(map, vp, radius, s_.kernel, s_.max_depth);
                         if (!(g.count > 0.f)) continue;
-                        const float n_new = px.count + s_.alpha * g.count;
-                        const float ratio = n_new / (px.count + g.count);
-                        px.tau = (px.tau + g.flux) * ratio;
-                        px.radius *= std::sqrt(ratio);
-                        px.count = n_new;
+                        const float n_new = count + s_.alpha * g.count;
+                        const float ratio = n_new / (count + g.count);
+                        tau = (tau + g.flux) * ratio;
+                        radius *= volume ? std::cbrt(ratio) : std::sqrt(ratio);
+                        count = n_new;
                     }
             });
-        }
         if (options.progress) options.progress(float(double(pass + 1) / double(passes)));
     }
 
-    // L = L_e / passes + τ / (π R² N_emitted), N_emitted = passes × photon_count.
+    // L = L_e / passes + τ / (π R² N_emitted) + τ_v / (4/3 π R_v³ N_emitted), N_emitted = passes × photon_count.
     Image image(width, height);
     const double emitted = double(passes) * double(s_.photon_count);
     for (size_t i = 0; i < pixels.size(); ++i) {
         const SPPMPixel& px = pixels[i];
+        const double rv3 = double(px.volume_radius) * px.volume_radius * px.volume_radius;
         image.pixels[i] = px.emission / float(passes) +
-                          px.tau * float(1.0 / (Pi * double(px.radius) * px.radius * emitted));
+                          px.tau * float(1.0 / (Pi * double(px.radius) * px.radius * emitted)) +
+                          px.volume_tau * float(1.0 / (4.0 / 3.0 * Pi * rv3 * emitted));
     }
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     stats.samples = uint64_t(pixels.size()) * passes;

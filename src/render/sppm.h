@@ -12,6 +12,9 @@ struct SPPMPixel {
     float count = 0.f;
     Color3f tau{0.f};
     Color3f emission{0.f};
+    // The same statistics of the pixel's visible points in media (merged with volume photons in a ball).
+    float volume_radius = 0.f, volume_count = 0.f;
+    Color3f volume_tau{0.f};
 };
 
 // The integrator's parameters (the table in sppm.cpp), which the differentiable photon-mapping estimators

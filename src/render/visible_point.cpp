@@ -1,5 +1,8 @@
 #include "render/visible_point.h"
 
+#include "render/medium_sampling.h"
+#include "render/volume_visibility.h"
+
 #include <algorithm>
 #include <limits>
 #include <tuple>
@@ -13,9 +16,29 @@ VisiblePoint trace_visible_point(const Scene& scene, Sampler& sampler, Ray ray, 
     const BSDFContext ctx{TransportMode::Radiance};
     const int max_depth = settings.max_depth < 0 ? std::numeric_limits<int>::max() : settings.max_depth;
     float eta = 1.f;
+    const Medium* medium = sensor_medium(scene);
     for (int depth = 1, crossings = 0; depth <= max_depth && crossings < 256; ++crossings) {
         ++rays.rays;
         const SurfaceInteraction3f si = scene.intersect(ray);
+        // Free flight through the current medium up to the surface: a scattering event is the visible point.
+        if (medium) {
+            const FreeFlightSample ff =
+                sample_free_flight(*medium, ray.o, ray.d, si.is_valid() ? si.t : Infinity, sampler);
+            if (ff.event == FreeFlightSample::Event::Absorbed) return {};
+            beta *= ff.weight;
+            if (ff.event == FreeFlightSample::Event::Scattered) {
+                if (depth + 1 > max_depth) return {};
+                const Color3f sigma_s = medium->sigma_t(ff.p) * medium->albedo(ff.p);
+                VisiblePoint vp;
+                vp.beta = Color3f(sigma_s.x > 0.f ? beta.x / sigma_s.x : 0.f, sigma_s.y > 0.f ? beta.y / sigma_s.y : 0.f,
+                                  sigma_s.z > 0.f ? beta.z / sigma_s.z : 0.f);
+                vp.depth = depth;
+                vp.medium = medium;
+                vp.p = ff.p;
+                vp.wi = -ray.d;
+                return vp;
+            }
+        }
         if (!si.is_valid()) {
             emission += beta * scene.eval_environment(ray.d);
             return {};
@@ -27,7 +50,11 @@ VisiblePoint trace_visible_point(const Scene& scene, Sampler& sampler, Ray ray, 
         if (mixed) beta *= 2.f;
         if (smooth && (!mixed || sampler.next_1d() < 0.5f)) {
             if (depth + 1 > max_depth) return {}; // no photon fits
-            return {si, beta, depth};
+            VisiblePoint vp;
+            vp.si = si;
+            vp.beta = beta;
+            vp.depth = depth;
+            return vp;
         }
         const float u1 = sampler.next_1d();
         const auto [bs, weight] = bsdf->sample(ctx, si, u1, sampler.next_2d());
@@ -35,6 +62,7 @@ VisiblePoint trace_visible_point(const Scene& scene, Sampler& sampler, Ray ray, 
         beta *= weight;
         eta *= bs.eta;
         ray = si.spawn_ray(si.to_world(bs.wo));
+        medium = target_medium(*si.shape, si.n, ray.d, medium);
         if (bs.sampled_type == BSDFNull) continue;
         if (chain) chain->push_back({si, bs.eta});
         ++depth;

@@ -4,14 +4,20 @@
 // the environment seen directly or through specular chains) is returned apart.
 #pragma once
 #include "render/integrator.h"
+#include "scene/medium.h"
 
 namespace penumbra {
 
 struct VisiblePoint {
-    SurfaceInteraction3f si; // si.wi: toward the camera side (local); invalid: the subpath found no point
-    Color3f beta;            // eye-subpath throughput up to si (the sensor's weight included)
-    int depth = 0;           // segments from the camera to si
-    bool valid() const { return si.is_valid(); }
+    SurfaceInteraction3f si; // si.wi: toward the camera side (local); invalid: none on a surface
+    Color3f beta;            // eye-subpath throughput up to the point (the sensor's weight included)
+    int depth = 0;           // segments from the camera to the point
+    // A point in a participating medium (si invalid): where the eye subpath scattered, the world direction
+    // toward the camera side, and the medium; beta excludes σ_s there (the volume photons' flux carries it).
+    const Medium* medium = nullptr;
+    Vec3f p, wi;
+    bool valid() const { return si.is_valid() || medium != nullptr; }
+    bool in_medium() const { return medium != nullptr; }
 };
 
 // A specular vertex of the eye subpath: where it was scattered, and the relative index η_out / η_in of the
