@@ -154,6 +154,7 @@ void cmd_derivative(const Common& c) {
     ProgressBar bar(!c.quiet, "derivative");
     run.progress = bar.callback();
     const MethodDerivative d = method->derivative(*scene, params, run);
+    for (const std::string& w : d.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     write_signed(c.output, d.derivative);
     if (!c.stderr_output.empty()) write_image(c.stderr_output, d.stderr_img);
     // Each term's image (and, with --stderr, its standard error as PREFIX_<term>_stderr.exr).

@@ -28,6 +28,12 @@ using namespace penumbra;
 
 namespace {
 
+// An estimate's warnings (what it leaves out) as Python UserWarnings.
+void warn(const std::vector<std::string>& warnings) {
+    for (const std::string& w : warnings)
+        if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) < 0) throw py::error_already_set();
+}
+
 // A loaded scene, its parameter table and the derivative methods used on it (kept: psdr calibrates its budget
 // once per configuration).
 struct PyScene {
@@ -250,11 +256,15 @@ PYBIND11_MODULE(_penumbra, m) {
                  SensorScope scope(*s.scene, sensor);
                  const Film& film = *s.scene->sensor->film;
                  const Image a = from_array(adjoint, film.width, film.height, "adjoint image");
+                 std::vector<std::string> warnings;
                  const std::vector<std::vector<double>> g =
                      run_interruptible<std::vector<std::vector<double>>>([&] {
                          s.table->select(entries);
-                         return s.table->chain(dm.gradient(*s.scene, s.table->parameters(), a, run).values);
+                         MethodGradient mg = dm.gradient(*s.scene, s.table->parameters(), a, run);
+                         warnings = std::move(mg.warnings);
+                         return s.table->chain(mg.values);
                      });
+                 warn(warnings);
                  py::list out;
                  for (const std::vector<double>& v : g) {
                      py::array_t<float> arr(py::ssize_t(v.size()));
@@ -280,6 +290,7 @@ PYBIND11_MODULE(_penumbra, m) {
                 s.table->select(directions);
                 return dm.derivative(*s.scene, s.table->parameters(), run);
             });
+            warn(d.warnings);
             py::object se = d.stderr_img.pixels.empty() ? py::object(py::none())
                                                         : py::object(to_array(std::move(d.stderr_img)));
             return py::make_tuple(to_array(std::move(d.derivative)), se);

@@ -295,3 +295,27 @@ TEST(DpmC, RefusesMediaAndBadOptions) {
     mp.enable({parse_param_selection("ball.translate=1,0,0")});
     EXPECT_THROW(dpm_derivative(*media, mp, DpmOptions{}), Error);
 }
+
+// The scene's sppm settings the estimate cannot follow are warnings in its result: the constant kernel (its
+// edge is not differentiated) and alpha < 1 (render and fd shrink the radius, dpm keeps it fixed).
+TEST(DpmC, WarnsAboutAConstantKernelAndAShrinkingRadius) {
+    auto warnings = [](const std::string& from, const std::string& to) {
+        std::string xml = scene_xml(mirror, above);
+        xml.replace(xml.find(from), from.size(), to);
+        auto scene = load_scene_string(xml);
+        Parameters params(*scene);
+        params.enable({parse_param_selection("mirror.rotate=0,0,1")});
+        DpmOptions o;
+        o.spp = 1;
+        o.paths = 1;
+        o.pixel_fraction = 0.1;
+        return dpm_derivative(*scene, params, o).warnings;
+    };
+    EXPECT_TRUE(warnings("", "").empty());
+    const auto constant = warnings("value=\"smooth\"", "value=\"constant\"");
+    ASSERT_EQ(constant.size(), 1u);
+    EXPECT_NE(constant[0].find("constant kernel"), std::string::npos) << constant[0];
+    const auto shrinking = warnings("name=\"alpha\" value=\"1\"", "name=\"alpha\" value=\"0.7\"");
+    ASSERT_EQ(shrinking.size(), 1u);
+    EXPECT_NE(shrinking[0].find("alpha"), std::string::npos) << shrinking[0];
+}

@@ -29,10 +29,26 @@ SPPMSettings photon_mapping_settings(const Scene& scene) {
     return s;
 }
 
+// What the estimate cannot follow in the scene's `sppm` settings (docs/dpm.md), for the user.
+std::vector<std::string> settings_warnings(const Scene& scene) {
+    std::vector<std::string> w;
+    const auto* sppm = dynamic_cast<const SPPMIntegrator*>(scene.integrator.get());
+    if (!sppm) return w;
+    const SPPMSettings& s = sppm->settings();
+    if (s.kernel == PhotonKernel::Constant)
+        w.push_back("dpm: the sppm integrator's constant kernel has an edge that is not differentiated; use "
+                    "<string name=\"kernel\" value=\"smooth\"/> (paper 003 Eq. 22)");
+    if (s.alpha < 1.f)
+        w.push_back("dpm: the derivative is the image's at the fixed initial radius, but the sppm integrator's alpha "
+                    "< 1 shrinks it (render and fd compute another image); use <float name=\"alpha\" value=\"1\"/>");
+    return w;
+}
+
 void check_options(const Scene& scene, const Parameters& params, const DpmOptions& o) {
     require_film(scene, params);
     if (scene_has_media(scene))
-        throw Error("dpm: participating media are not supported by photon mapping (differentiate with psdr)");
+        throw Error("dpm: differentiating photon mapping through participating media is not supported (sppm renders "
+                    "them; differentiate with psdr)");
     if (o.spp <= 0 || o.batches <= 0) throw Error("dpm: spp and batches must be positive");
     if (!(o.pixel_fraction > 0.0 && o.pixel_fraction <= 1.0))
         throw Error("dpm: the pixel fraction must be in (0, 1]");
@@ -209,6 +225,7 @@ DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const
         out.screen_y_stderr = y_batches.standard_error();
     }
     out.mean_stderr = derivative_batches.mean_standard_error();
+    out.warnings = settings_warnings(scene);
     out.image.seconds = seconds_since(start);
     return out;
 }
@@ -232,6 +249,7 @@ Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image&
             sweep.run();
         });
     out.values = total(sweeps, dim);
+    out.warnings = settings_warnings(scene);
     out.seconds = seconds_since(start);
     return out;
 }
@@ -279,7 +297,7 @@ DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, 
         });
     DpmMatching out;
     out.loss = loss.value;
-    out.gradient = Gradient{total(sweeps, dim), {}, primal, 0.0, {}};
+    out.gradient = Gradient{total(sweeps, dim), settings_warnings(scene), primal, 0.0, {}};
     out.gradient.seconds = seconds_since(start);
     return out;
 }

@@ -52,6 +52,7 @@ struct DpmDerivative {
     // shared by neighbouring pixels, so pixel errors are correlated and sqrt(Σσ²)/N underestimates it (by up
     // to 2× on the validation scenes, docs/dpm-validation.md).
     double mean_stderr = 0;
+    std::vector<std::string> warnings; // the scene's sppm settings the estimate does not follow
 };
 
 // Forward mode along params.direction().

@@ -69,6 +69,7 @@ struct MethodDerivative {
     std::vector<MethodTerm> terms; // the method's terms separately (psdr: interior, primary, ...), or empty
     std::string description; // one line for the log ("interior + boundary terms, image-space first vertex")
     double seconds = 0;
+    std::vector<std::string> warnings; // what the estimate leaves out, for the user
 };
 
 struct MethodGradient {
