@@ -44,8 +44,8 @@ void trace_photon_path(const Scene& scene, const PhotonTracingSettings& settings
     PhotonWalk(scene, settings).trace(scene, sampler, rays, seed, pass, index, path);
 }
 
-PhotonSet trace_photons(const Scene& scene, const PhotonTracingSettings& settings, uint64_t seed,
-                                  uint64_t pass, PhotonTracingStats& stats) {
+PhotonSet trace_photons(const Scene& scene, const PhotonTracingSettings& settings, uint64_t seed, uint64_t pass,
+                        PhotonTracingStats& stats) {
     if (settings.paths == 0 || scene.emitters.empty()) return {};
     const uint64_t granularity =
         settings.granularity > 0 ? settings.granularity : std::max<uint64_t>(1024, settings.paths / 256);

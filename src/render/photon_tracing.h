@@ -27,8 +27,8 @@ struct PhotonTracingStats {
 // The photons of pass `pass`: light subpath i draws its numbers from the stream (seed, i, pass), and the
 // photons are listed by subpath index, then depth, so they are the same whatever the thread count. Light
 // subpaths cross participating media (free flights, phase-function scattering) when the scene has any.
-PhotonSet trace_photons(const Scene& scene, const PhotonTracingSettings& settings, uint64_t seed,
-                                  uint64_t pass, PhotonTracingStats& stats);
+PhotonSet trace_photons(const Scene& scene, const PhotonTracingSettings& settings, uint64_t seed, uint64_t pass,
+                        PhotonTracingStats& stats);
 
 // Light subpath `index` of pass `pass` again, vertex for vertex as trace_photons() traced it (its photons are
 // path[photon.depth]): the differentiable estimators re-trace the few paths they differentiate.
