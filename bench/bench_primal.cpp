@@ -1,4 +1,8 @@
-// On a 200k-triangle scene, in one run:
+// In one run:
+//  - Mitsuba's Cornell box (mitsuba-data/docs/scenes/variants_cbox_rgb.xml, 500x500, max_depth 6, when
+//    ../shared is present): primal samples/s per core with 1 and with 2 threads (the thread scaling);
+//  - the primal cost per sample on the bumpy sphere at 1k, 10k, 100k and 1M triangles (growth with n);
+// and on a 200k-triangle scene:
 //  - primal throughput of `path` and raw Embree incoherent-ray throughput on the same geometry (their ratio);
 //  - the reverse-mode gradient pass (interior term, every data parameter enabled: 300k+ scalars, most of them
 //    vertex positions) against the primal pass at the same samples per pixel (their time ratio per sample);
@@ -29,10 +33,11 @@ using namespace penumbra;
 
 namespace {
 
-constexpr int kRings = 320, kSegments = 320; // 2 * 320 * 320 = 204,800 triangles
+constexpr int kRings = 320; // 2 * 320 * 320 = 204,800 triangles
 
-// A bumpy sphere written as binary PLY: a stand-in for a scanned object of realistic size.
-std::string write_bumpy_sphere(const std::filesystem::path& dir) {
+// A bumpy sphere of 2 rings² triangles written as binary PLY: a stand-in for a scanned object.
+std::string write_bumpy_sphere(const std::filesystem::path& dir, int kRings) {
+    const int kSegments = kRings;
     std::vector<Vec3f> v;
     for (int i = 0; i <= kRings; ++i)
         for (int j = 0; j < kSegments; ++j) {
@@ -48,7 +53,7 @@ std::string write_bumpy_sphere(const std::filesystem::path& dir) {
             f.push_back({a, c, b});
             f.push_back({b, c, d});
         }
-    const std::string path = (dir / "bumpy.ply").string();
+    const std::string path = (dir / ("bumpy" + std::to_string(kRings) + ".ply")).string();
     std::ofstream out(path, std::ios::binary);
     out << "ply\nformat binary_little_endian 1.0\nelement vertex " << v.size()
         << "\nproperty float x\nproperty float y\nproperty float z\nelement face " << f.size()
@@ -62,10 +67,10 @@ std::string write_bumpy_sphere(const std::filesystem::path& dir) {
     return path;
 }
 
-std::unique_ptr<Scene> make_scene() {
+std::unique_ptr<Scene> make_scene(int rings = kRings) {
     const auto dir = std::filesystem::temp_directory_path() / "penumbra_bench";
     std::filesystem::create_directories(dir);
-    const std::string ply = write_bumpy_sphere(dir);
+    const std::string ply = write_bumpy_sphere(dir, rings);
     return load_scene_string(R"(<scene version="3.0.0">
       <integrator type="path"><integer name="max_depth" value="6"/></integrator>
       <sensor type="perspective"><float name="fov" value="40"/>
@@ -125,7 +130,7 @@ struct RawEmbree {
     RTCScene scene = rtcNewScene(device);
     explicit RawEmbree(const Scene& s) {
         rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
-        rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+        if (s.robust_intersections) rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
         for (const auto& shape : s.shapes) {
             RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
             auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -232,6 +237,59 @@ void BM_Gradient(benchmark::State& state) {
     state.counters["samples/s"] = samples / seconds;
 }
 
+// Mitsuba 3's Cornell box as its file says (500x500, max_depth 6), 4 spp per iteration, on 1 or 2 threads.
+const std::string kCornellBox = PENUMBRA_SHARED_DIR "/mitsuba-data/docs/scenes/variants_cbox_rgb.xml";
+double g_cbox_samples_per_core_s[3] = {0, 0, 0};
+
+void BM_CornellBox(benchmark::State& state) {
+    const int threads = int(state.range(0));
+    if (!std::filesystem::exists(kCornellBox)) {
+        state.SkipWithError("mitsuba-data absent");
+        for (auto _ : state) {
+        }
+        return;
+    }
+    static std::unique_ptr<Scene> cbox = load_scene(kCornellBox);
+    RenderOptions opt;
+    opt.spp = 4;
+    opt.threads = threads;
+    double seconds = 0, samples = 0;
+    for (auto _ : state) {
+        RenderStats stats;
+        render(*cbox, opt, &stats);
+        samples += double(stats.samples);
+        seconds += stats.seconds;
+    }
+    g_cbox_samples_per_core_s[threads] = samples / seconds / threads;
+    state.counters["samples/s/core"] = g_cbox_samples_per_core_s[threads];
+    state.counters["64spp_seconds"] = 500.0 * 500.0 * 64.0 / (samples / seconds);
+}
+
+// The primal cost per sample against the triangle count (the bumpy sphere, 4 spp per iteration).
+constexpr int kCurveRings[4] = {22, 71, 224, 707}; // 968, 10082, 100352, 999698 triangles
+double g_curve_seconds_per_sample[4] = {0, 0, 0, 0};
+size_t g_curve_triangles[4] = {0, 0, 0, 0};
+
+void BM_TriangleCount(benchmark::State& state) {
+    const int k = int(state.range(0));
+    const std::unique_ptr<Scene> s = make_scene(kCurveRings[k]);
+    RenderOptions opt;
+    opt.spp = 4;
+    double seconds = 0, samples = 0;
+    for (auto _ : state) {
+        RenderStats stats;
+        render(*s, opt, &stats);
+        samples += double(stats.samples);
+        seconds += stats.seconds;
+    }
+    g_curve_seconds_per_sample[k] = seconds / samples;
+    g_curve_triangles[k] = s->triangle_count();
+    state.counters["triangles"] = double(g_curve_triangles[k]);
+    state.counters["samples/s"] = samples / seconds;
+}
+
+BENCHMARK(BM_CornellBox)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->MinTime(5.0)->UseRealTime();
+BENCHMARK(BM_TriangleCount)->DenseRange(0, 3)->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
 BENCHMARK(BM_PathPrimal)->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
 // Forward mode along a translation of the mesh (every vertex moves).
 void BM_Derivative(benchmark::State& state) {
@@ -302,6 +360,19 @@ int main(int argc, char** argv) {
     benchmark::Initialize(&argc, argv);
     scene(); // load outside the timed region
     benchmark::RunSpecifiedBenchmarks();
+    if (g_cbox_samples_per_core_s[1] > 0 && g_cbox_samples_per_core_s[2] > 0)
+        std::printf("Cornell box (Mitsuba's, 500x500, max_depth 6): %.3g samples/s per core on 1 thread, %.3g on 2 "
+                    "(2-thread efficiency %.2f); 64 spp on 2 threads: %.1f s\n",
+                    g_cbox_samples_per_core_s[1], g_cbox_samples_per_core_s[2],
+                    g_cbox_samples_per_core_s[2] / g_cbox_samples_per_core_s[1],
+                    500.0 * 500.0 * 64.0 / (2.0 * g_cbox_samples_per_core_s[2]));
+    if (g_curve_seconds_per_sample[0] > 0) {
+        std::printf("primal time per sample against triangles (relative to the smallest):");
+        for (int k = 0; k < 4; ++k)
+            if (g_curve_seconds_per_sample[k] > 0)
+                std::printf(" %zu: %.2f,", g_curve_triangles[k], g_curve_seconds_per_sample[k] / g_curve_seconds_per_sample[0]);
+        std::printf("\n");
+    }
     if (g_path_rays_per_s > 0 && g_surface_rays_per_s > 0 && g_raw_rays_per_s > 0) {
         std::printf("%zu triangles, %d threads\n", scene().triangle_count(), tbb::this_task_arena::max_concurrency());
         std::printf("path integrator rays/s / raw Embree surface-origin incoherent rays/s = %.3f\n",

@@ -1,6 +1,7 @@
 // Shapes on triangle meshes: tessellated primitives, area sampling, surface interactions, finalize() errors.
 #include "core/rng.h"
 #include "scene/shape.h"
+#include "scene/shape_interaction.h"
 
 #include <gtest/gtest.h>
 
@@ -201,8 +202,48 @@ TEST(MeshShape, FaceNormalsIgnoreVertexNormals) {
     expect_near(smooth.compute_surface_interaction(ray, h.t, h.prim, h.b1, h.b2).sh_frame.n,
                 normalize(Vec3f(1, 0, 1)), 1e-6f);
     smooth.face_normals = true;
+    smooth.finalize(); // the per-triangle shading data follow the shading mode
     expect_near(smooth.compute_surface_interaction(ray, h.t, h.prim, h.b1, h.b2).sh_frame.n, Vec3f(0, 0, 1),
                 1e-6f);
+}
+
+// The vertex data as stored, but not the stored mesh's type: surface_interaction() computes every hit.
+struct UncachedVertices {
+    const TriangleMesh& mesh;
+    Vec3f position(uint32_t v) const { return mesh.positions[v]; }
+    Vec3f normal(uint32_t v) const { return mesh.normals[v]; }
+};
+
+// Hits on the stored mesh use the per-triangle data finalize() keeps (Shape::triangle_shading): the same
+// interaction as computing it, bit for bit with flat shading, within rounding where three equal vertex
+// normals make the frame constant, and through the per-hit path with varying vertex normals (a sphere).
+TEST(MeshShape, CachedTriangleShadingEqualsTheComputedInteraction) {
+    TriangleMesh equal = make_rectangle_mesh();
+    equal.normals.assign(4, normalize(Vec3f(0.3f, 0.1f, 1)));
+    TriangleMesh flat = make_rectangle_mesh();
+    flat.normals.clear();
+    const Shape shapes[3] = {make(flat, Transform::rotate(Vec3f(1, 2, 3), 40.f)), make(equal),
+                             make(make_sphere_mesh(Vec3f(0.5f, 0, 0), 1.f, 16, 32))};
+    PCG32 rng(3, 7);
+    for (int k = 0; k < 3; ++k) {
+        const Shape& s = shapes[k];
+        for (int n = 0; n < 200; ++n) {
+            const uint32_t prim = uint32_t(rng.next_float() * float(s.mesh.face_count())) % s.mesh.face_count();
+            float b1 = rng.next_float(), b2 = rng.next_float();
+            if (b1 + b2 > 1.f) b1 = 1.f - b1, b2 = 1.f - b2;
+            const Ray ray(Vec3f(0, 0, 5), Vec3f(0, 0, -1));
+            const SurfaceInteraction3f cached = s.compute_surface_interaction(ray, 1.f, prim, b1, b2);
+            const SurfaceInteraction3f computed =
+                surface_interaction<float>(s, prim, Vec2f(b1, b2), UncachedVertices{s.mesh});
+            const float tol = k == 0 ? 0.f : 2e-7f;
+            expect_near(cached.p, computed.p, tol);
+            expect_near(cached.n, computed.n, tol);
+            expect_near(cached.sh_frame.s, computed.sh_frame.s, tol);
+            expect_near(cached.sh_frame.t, computed.sh_frame.t, tol);
+            expect_near(cached.sh_frame.n, computed.sh_frame.n, tol);
+            EXPECT_EQ(cached.uv, computed.uv);
+        }
+    }
 }
 
 TEST(MeshShape, FinalizeErrorsNameTheShape) {

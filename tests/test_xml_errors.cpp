@@ -137,8 +137,9 @@ TEST(XmlErrors, VersionAndRoot) {
 }
 
 TEST(XmlErrors, MisplacedElements) {
-    EXPECT_CONTAINS(string_error(scene("<float name=\"a\" value=\"1\"/>")),
-                    "<string>:2: <float> must appear inside an object, not directly in <scene>");
+    // Values directly in <scene> are the scene's parameters (Mitsuba 3 has one).
+    EXPECT_CONTAINS(load_error_of([] { load_scene_string(scene("<float name=\"a\" value=\"1\"/>")); }),
+                    "<string>:2: unknown parameter 'a' of <scene>");
     EXPECT_CONTAINS(string_error(scene("<shape type=\"x\"><translate x=\"1\"/></shape>")),
                     "<translate> may only appear inside <transform>");
     EXPECT_CONTAINS(
@@ -205,4 +206,13 @@ TEST(XmlErrors, LoaderRejectsWhatPenumbraCannotRender) {
                                            "<emitter type=\"area\" id=\"lamp\"/>"));
     ASSERT_EQ(s->emitters.size(), 1u);
     EXPECT_EQ(s->emitters[0]->shape(), s->shapes[0].get());
+}
+
+// Mitsuba 3's scene parameter embree_use_robust_intersections (default false, as there).
+TEST(XmlScene, RobustIntersectionsParameter) {
+    const std::string sphere = "<shape type=\"sphere\"/>";
+    EXPECT_FALSE(load_scene_string(scene(sphere))->robust_intersections);
+    EXPECT_TRUE(load_scene_string(scene("<boolean name=\"embree_use_robust_intersections\" value=\"true\"/>" +
+                                        sphere))
+                    ->robust_intersections);
 }

@@ -23,8 +23,15 @@ DiscreteDistribution::DiscreteDistribution(const std::vector<float>& weights) {
 }
 
 size_t DiscreteDistribution::sample(float& u) const {
-    auto it = std::upper_bound(cdf_.begin(), cdf_.end(), double(u));
-    size_t i = size_t(std::clamp<ptrdiff_t>(it - cdf_.begin() - 1, 0, ptrdiff_t(pmf_.size()) - 1));
+    // The last i with cdf[i] <= u: a linear scan for a few entries (an emitter's triangles), else a search.
+    const size_t n = pmf_.size();
+    size_t i = 0;
+    if (n <= 8) {
+        while (i + 1 < n && cdf_[i + 1] <= double(u)) ++i;
+    } else {
+        auto it = std::upper_bound(cdf_.begin(), cdf_.end(), double(u));
+        i = size_t(std::clamp<ptrdiff_t>(it - cdf_.begin() - 1, 0, ptrdiff_t(n) - 1));
+    }
     while (pmf_[i] == 0.f && i + 1 < pmf_.size()) ++i; // never return a zero-probability entry
     const double w = cdf_[i + 1] - cdf_[i];
     u = w > 0 ? float(std::clamp((double(u) - cdf_[i]) / w, 0.0, 0.99999994)) : 0.f;

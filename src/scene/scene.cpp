@@ -102,7 +102,7 @@ void Scene::build() {
         embree_.get());
     embree_->scene = rtcNewScene(embree_->device);
     rtcSetSceneBuildQuality(embree_->scene, RTC_BUILD_QUALITY_HIGH);
-    rtcSetSceneFlags(embree_->scene, RTC_SCENE_FLAG_ROBUST);
+    if (robust_intersections) rtcSetSceneFlags(embree_->scene, RTC_SCENE_FLAG_ROBUST);
 
     Vec3f lo(Infinity), hi(-Infinity);
     for (unsigned id = 0; id < shapes.size(); ++id)
@@ -114,7 +114,7 @@ void Scene::build() {
         if (!embree_->groups.count(group)) {
             RTCScene bvh = rtcNewScene(embree_->device);
             rtcSetSceneBuildQuality(bvh, RTC_BUILD_QUALITY_HIGH);
-            rtcSetSceneFlags(bvh, RTC_SCENE_FLAG_ROBUST);
+            if (robust_intersections) rtcSetSceneFlags(bvh, RTC_SCENE_FLAG_ROBUST);
             Vec3f glo(Infinity), ghi(-Infinity);
             for (unsigned id = 0; id < group->shapes.size(); ++id)
                 attach_mesh(embree_->device, bvh, group->shapes[id]->mesh, id, glo, ghi);

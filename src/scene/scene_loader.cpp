@@ -110,6 +110,9 @@ void add_shape(Scene& scene, const std::shared_ptr<Object>& obj) {
 std::unique_ptr<Scene> build_scene(const XmlScene& xml, const std::string& source_path) {
     auto scene = std::make_unique<Scene>();
     scene->source_path = source_path;
+    // Mitsuba 3's one scene parameter (its default: Embree's faster, non-watertight triangle test).
+    scene->robust_intersections = xml.props.get_bool("embree_use_robust_intersections", false);
+    xml.props.check_all_queried("<scene>");
     Instantiator inst(xml);
     std::vector<std::pair<const Emitter*, SourceLocation>> top_level_area_emitters;
     for (const XmlChild& child : xml.objects) {

@@ -5,6 +5,7 @@
 
 #include "core/warp.h"
 
+#include <limits>
 #include <sstream>
 
 namespace penumbra {
@@ -49,6 +50,30 @@ void Shape::finalize() {
     area_distribution_ = DiscreteDistribution(areas);
     total_area_ = float(total);
     build_rings();
+    build_triangle_shading();
+}
+
+// The per-hit work that depends on the triangle alone (normal, dp/du, and the whole shading frame when it
+// is constant over the triangle) done once per triangle by surface_interaction() itself. With three equal
+// vertex normals the frame is the one at vertex 0 (elsewhere the interpolation rounds to within an ulp of it).
+void Shape::build_triangle_shading() {
+    triangles_.clear();
+    std::vector<TriangleShading> triangles(mesh.face_count());
+    const bool flat = flat_shading();
+    for (uint32_t f = 0; f < triangles.size(); ++f) {
+        const uint32_t* i = &mesh.indices[3 * size_t(f)];
+        TriangleShading& c = triangles[f];
+        Vec3f dp_du;
+        triangle_normal_and_dp_du(mesh, i, mesh.positions[i[1]] - mesh.positions[i[0]],
+                                  mesh.positions[i[2]] - mesh.positions[i[0]], c.n, dp_du);
+        if (flat || (mesh.normals[i[0]] == mesh.normals[i[1]] && mesh.normals[i[0]] == mesh.normals[i[2]])) {
+            c.frame = surface_interaction<float>(*this, f, Vec2f(0.f), MeshVertices{mesh}).sh_frame;
+        } else {
+            c.frame.s = dp_du;
+            c.frame.n = Vec3f(std::numeric_limits<float>::quiet_NaN());
+        }
+    }
+    triangles_ = std::move(triangles);
 }
 
 // Counting sort of the faces by vertex.
@@ -71,6 +96,7 @@ void Shape::update_from_group() {
 }
 
 Vec3f Shape::face_normal(uint32_t prim) const {
+    if (!triangles_.empty()) return triangles_[prim].n;
     const Triangle t = triangle(mesh, prim);
     return normalize(cross(t.p1 - t.p0, t.p2 - t.p0));
 }

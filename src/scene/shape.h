@@ -14,6 +14,15 @@ namespace penumbra {
 class Medium;
 class Sensor;
 
+// What a hit takes from its triangle alone: the geometric normal n and, when the shading frame is the same
+// over the triangle (flat shading, or three equal vertex normals), that frame; otherwise s = dp/du
+// (Gram-Schmidt against the interpolated normal per hit). 48 bytes per triangle.
+struct TriangleShading {
+    Vec3f n;
+    Frame3f frame;
+    bool constant_frame() const { return frame.n.x == frame.n.x; } // NaN n: varies over the triangle
+};
+
 class Shape : public Object {
 public:
     ObjectKind kind() const override { return ObjectKind::Shape; }
@@ -59,12 +68,20 @@ public:
 
     // Geometric normal of a triangle (unit, from the winding order).
     Vec3f face_normal(uint32_t prim) const;
+    // Shading normal = geometric normal (no vertex normals, or face_normals).
+    bool flat_shading() const { return face_normals || mesh.normals.empty(); }
+    // What surface_interaction() takes from a triangle alone, kept by finalize() (null before).
+    const TriangleShading* triangle_shading(uint32_t prim) const {
+        return triangles_.empty() ? nullptr : &triangles_[prim];
+    }
     // Fills a surface interaction from a ray hit at distance t in triangle prim with barycentrics (b1, b2).
     SurfaceInteraction3f compute_surface_interaction(const Ray& ray, float t, uint32_t prim, float b1, float b2) const;
 
 private:
     void build_rings();
+    void build_triangle_shading();
     DiscreteDistribution area_distribution_;
+    std::vector<TriangleShading> triangles_;
     std::vector<uint32_t> ring_offsets_, ring_faces_;
     float total_area_ = 0.f;
     size_t degenerate_count_ = 0;

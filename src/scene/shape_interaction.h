@@ -4,6 +4,8 @@
 #pragma once
 #include "scene/shape.h"
 
+#include <type_traits>
+
 namespace penumbra {
 
 // Vertex data of the mesh as stored (the reference configuration).
@@ -12,6 +14,20 @@ struct MeshVertices {
     Vec3f position(uint32_t v) const { return mesh.positions[v]; }
     Vec3f normal(uint32_t v) const { return mesh.normals[v]; }
 };
+
+// The geometric normal and dp/du of triangle i, which solves [p1-p0, p2-p0] = [dp/du, dp/dv] [uv1-uv0, uv2-uv0]
+// (coordinate_system(n) without uvs or when singular).
+template <typename T>
+void triangle_normal_and_dp_du(const TriangleMesh& mesh, const uint32_t* i, const Vec3<T>& dp0, const Vec3<T>& dp1,
+                               Vec3<T>& n, Vec3<T>& dp_du) {
+    n = normalize(cross(dp0, dp1));
+    Vec3<T> dp_dv;
+    coordinate_system(n, dp_du, dp_dv);
+    if (mesh.uvs.empty()) return;
+    const Vec2f duv0 = mesh.uvs[i[1]] - mesh.uvs[i[0]], duv1 = mesh.uvs[i[2]] - mesh.uvs[i[0]];
+    const float det = duv0.x * duv1.y - duv0.y * duv1.x;
+    if (det != 0.f) dp_du = (dp0 * T(duv1.y) - dp1 * T(duv0.y)) / T(det);
+}
 
 // Mitsuba 3 mesh interaction: p from barycentrics, n = face normal, shading normal = normalized interpolated
 // vertex normal, shading tangent s = Gram-Schmidt of dp/du against it, where dp/du solves
@@ -30,21 +46,27 @@ SurfaceInteraction<T> surface_interaction(const Shape& shape, uint32_t prim, con
 
     SurfaceInteraction<T> si;
     si.p = p0 * b0 + p1 * b1 + p2 * b2;
-    si.n = normalize(cross(dp0, dp1));
     si.bary = Vec2f(detach(b1), detach(b2));
     si.shape = &shape;
     si.prim_index = prim;
-
-    Vec3<T> dp_du, dp_dv;
-    coordinate_system(si.n, dp_du, dp_dv);
-    if (mesh.uvs.empty()) {
-        si.uv = Vec2<T>(b1, b2);
+    si.uv = mesh.uvs.empty() ? Vec2<T>(b1, b2)
+                             : Vec2<T>(mesh.uvs[i[0]]) * b0 + Vec2<T>(mesh.uvs[i[1]]) * b1 +
+                                   Vec2<T>(mesh.uvs[i[2]]) * b2;
+    Vec3<T> dp_du;
+    if constexpr (std::is_same_v<T, float> && std::is_same_v<Vertices, MeshVertices>) {
+        // The stored mesh: what depends on the triangle alone was computed once by finalize() (below).
+        if (const TriangleShading* cached = shape.triangle_shading(prim)) {
+            si.n = cached->n;
+            if (cached->constant_frame()) {
+                si.sh_frame = cached->frame;
+                return si;
+            }
+            dp_du = cached->frame.s;
+        } else {
+            triangle_normal_and_dp_du(mesh, i, dp0, dp1, si.n, dp_du);
+        }
     } else {
-        const Vec2f uv0 = mesh.uvs[i[0]], uv1 = mesh.uvs[i[1]], uv2 = mesh.uvs[i[2]];
-        si.uv = Vec2<T>(uv0) * b0 + Vec2<T>(uv1) * b1 + Vec2<T>(uv2) * b2;
-        const Vec2f duv0 = uv1 - uv0, duv1 = uv2 - uv0;
-        const float det = duv0.x * duv1.y - duv0.y * duv1.x;
-        if (det != 0.f) dp_du = (dp0 * T(duv1.y) - dp1 * T(duv0.y)) / T(det);
+        triangle_normal_and_dp_du(mesh, i, dp0, dp1, si.n, dp_du);
     }
 
     Vec3<T> ns = si.n;

@@ -409,25 +409,24 @@ class Parser {
 
     void parse_value(const pugi::xml_node& e, const Source& src, const SourceLocation& loc, XmlNode* parent) {
         const std::string tag = e.name();
-        if (!parent)
-            throw LoadError(loc, "<" + tag + "> must appear inside an object, not directly in <scene>");
+        Properties& props = parent ? parent->props : scene_.props; // directly in <scene>: the scene's own
         if (tag == "transform") {
             const std::string name = attributes(e, loc, {"name"}, {"name"}).at("name");
             check_name(name, loc, "name");
-            parent->props.set(name, parse_transform(e, src), loc);
+            props.set(name, parse_transform(e, src), loc);
             return;
         }
         if (tag == "point" || tag == "vector") {
             const Attributes a = attributes(e, loc, {"name", "value", "x", "y", "z"}, {"name"});
             check_name(a.at("name"), loc, "name");
-            parent->props.set(a.at("name"), parse_xyz(e, a, loc, 0.f), loc);
+            props.set(a.at("name"), parse_xyz(e, a, loc, 0.f), loc);
             return;
         }
         if (tag == "spectrum") {
             const Attributes a = attributes(e, loc, {"name", "value", "filename"}, {"name"});
             check_name(a.at("name"), loc, "name");
-            parent->props.set(a.at("name"),
-                              ColorValue{parse_spectrum(a, loc, parent->kind == ObjectKind::Emitter)}, loc);
+            props.set(a.at("name"),
+                              ColorValue{parse_spectrum(a, loc, parent && parent->kind == ObjectKind::Emitter)}, loc);
             return;
         }
         const Attributes a = attributes(e, loc, {"name", "value"}, {"name", "value"});
@@ -452,7 +451,7 @@ class Parser {
         } else { // rgb: one gray value or three components
             v = ColorValue{parse_vec3(value, loc, what, true)};
         }
-        parent->props.set(name, std::move(v), loc);
+        props.set(name, std::move(v), loc);
     }
 
     // x/y/z attributes (missing ones take `def`) or one `value` with 1 or 3 numbers.

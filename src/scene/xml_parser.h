@@ -38,6 +38,7 @@ struct XmlScene {
     std::vector<XmlChild> objects;                       // top-level objects in document order
     std::map<std::string, std::shared_ptr<XmlNode>> ids; // every id and alias
     std::vector<std::string> search_paths;               // scene file's directory first, then <path> entries
+    Properties props;                                    // values directly in <scene> (Mitsuba's scene parameters)
 };
 
 // Parses a scene file. `defines` override <default> values (mitsuba's -D name=value).

@@ -25,12 +25,14 @@ namespace {
 
 class AreaEmitter final : public EmitterBase<AreaEmitter> {
 public:
-    explicit AreaEmitter(std::shared_ptr<Texture> radiance) : radiance_(std::move(radiance)) {
+    explicit AreaEmitter(std::shared_ptr<Texture> radiance)
+        : radiance_(std::move(radiance)), constant_(radiance_->is_constant()) {
         flags_ = EmitterSurface;
     }
 
     // L_e at a point of the shape, as a surface interaction with a frame around the geometric normal.
     Color3f radiance_at(const PositionSample3f& ps, const Vec3f& wo_world) const {
+        if (constant_) return radiance_->mean(); // the value eval() would return, without the interaction
         SurfaceInteraction3f si;
         si.t = 0.f;
         si.p = ps.p;
@@ -106,6 +108,7 @@ public:
 
 private:
     std::shared_ptr<Texture> radiance_;
+    bool constant_; // a constant radiance texture
 };
 
 } // namespace
