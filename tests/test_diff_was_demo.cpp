@@ -19,7 +19,7 @@ const std::string was_dir = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/was/";
 // The demo at reduced cost: 32 × 32 (its configurations are 64 × 64) with N' = 8 auxiliary rays (the
 // configurations' default 32: 4× the gradient's cost), 100 iterations at 6° per step decaying to 0.02× (the
 // configurations: 120 at 3° to 0.05×), a 256-spp target and 16 gradient samples per pixel. Threshold: the
-// rotation error below 3° from ±45° and ±90° (a 15–30× reduction; measured 1.6–2.4°, deterministic for the
+// rotation error below 3° from ±45° and ±90° (a 15–30× reduction; measured 1.6–2.6°, deterministic for the
 // configurations' seed: what N' = 8 leaves, its consistent bias and the last steps' noise). With 80
 // iterations at the same rates −90° stopped at 4.4° and +90° at 0.7° (0.13 s per iteration); at 16 × 16 the
 // shadow covers too few pixels and −90° only gets to −31° in 60 iterations. The configurations themselves at

@@ -32,8 +32,8 @@ public:
     std::map<std::string, std::shared_ptr<Object>> named_objects;
     std::string source_path;
     // Embree's watertight (robust) triangle test: Mitsuba 3's scene parameter embree_use_robust_intersections,
-    // off by default as there (about 9% faster on the Cornell box; a ray through a shared edge may miss both
-    // triangles). Takes effect at build().
+    // off by default as there for rendering (about 9% faster on the Cornell box; a ray through a shared edge
+    // may miss both triangles); Parameters turns it on (the derivative estimators). Takes effect at build().
     bool robust_intersections = false;
 
     // Makes `which` (an index into sensors, or a sensor's id) the rendered sensor; throws Error naming the
