@@ -95,11 +95,13 @@ Scene& scene() {
 }
 
 double g_path_rays_per_s = 0, g_raw_rays_per_s = 0; // raw: volume workload
+bool g_primal_robust = false; // the primal's Embree flags (Parameters later turns the watertight test on)
 double g_primal_seconds_per_sample = 0, g_gradient_seconds_per_sample = 0;
 size_t g_gradient_dimension = 0;
 double g_derivative_seconds_per_sample = 0, g_derivative_seconds_per_unit = 0, g_gradient_seconds_per_unit = 0;
 
 void BM_PathPrimal(benchmark::State& state) {
+    g_primal_robust = scene().robust_intersections;
     RenderOptions opt;
     opt.spp = 4;
     double rays = 0, seconds = 0, samples = 0;
@@ -117,7 +119,7 @@ void BM_PathPrimal(benchmark::State& state) {
     state.counters["triangles"] = double(scene().triangle_count());
 }
 
-// Raw Embree on the same geometry, same build quality and threads as the integrator: rtcIntersect1 on
+// Raw Embree on the same geometry, same build quality, flags and threads as the primal: rtcIntersect1 on
 // incoherent rays drawn from one of two workloads.
 enum class RayWorkload {
     Surface, // origins on the surfaces (by area), directions uniform over the hemisphere of the normal: the
@@ -130,7 +132,7 @@ struct RawEmbree {
     RTCScene scene = rtcNewScene(device);
     explicit RawEmbree(const Scene& s) {
         rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
-        if (s.robust_intersections) rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+        if (g_primal_robust) rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
         for (const auto& shape : s.shapes) {
             RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
             auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
