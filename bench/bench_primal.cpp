@@ -100,18 +100,28 @@ double g_primal_seconds_per_sample = 0, g_gradient_seconds_per_sample = 0;
 size_t g_gradient_dimension = 0;
 double g_derivative_seconds_per_sample = 0, g_derivative_seconds_per_unit = 0, g_gradient_seconds_per_unit = 0;
 
+// Renders `s` with `opt` for as long as the benchmark runs; the totals of the render statistics.
+struct RenderTotals {
+    double rays = 0, samples = 0, seconds = 0;
+};
+RenderTotals time_renders(benchmark::State& state, const Scene& s, const RenderOptions& opt) {
+    RenderTotals t;
+    for (auto _ : state) {
+        RenderStats stats;
+        render(s, opt, &stats);
+        t.rays += double(stats.rays);
+        t.samples += double(stats.samples);
+        t.seconds += stats.seconds;
+    }
+    return t;
+}
+
 void BM_PathPrimal(benchmark::State& state) {
     g_primal_robust = scene().robust_intersections;
     RenderOptions opt;
     opt.spp = 4;
-    double rays = 0, seconds = 0, samples = 0;
-    for (auto _ : state) {
-        RenderStats stats;
-        render(scene(), opt, &stats);
-        rays += double(stats.rays);
-        samples += double(stats.samples);
-        seconds += stats.seconds;
-    }
+    const RenderTotals t = time_renders(state, scene(), opt);
+    const double rays = t.rays, seconds = t.seconds, samples = t.samples;
     g_path_rays_per_s = rays / seconds;
     g_primal_seconds_per_sample = seconds / samples;
     state.counters["rays/s"] = g_path_rays_per_s;
@@ -255,16 +265,10 @@ void BM_CornellBox(benchmark::State& state) {
     RenderOptions opt;
     opt.spp = 4;
     opt.threads = threads;
-    double seconds = 0, samples = 0;
-    for (auto _ : state) {
-        RenderStats stats;
-        render(*cbox, opt, &stats);
-        samples += double(stats.samples);
-        seconds += stats.seconds;
-    }
-    g_cbox_samples_per_core_s[threads] = samples / seconds / threads;
+    const RenderTotals t = time_renders(state, *cbox, opt);
+    g_cbox_samples_per_core_s[threads] = t.samples / t.seconds / threads;
     state.counters["samples/s/core"] = g_cbox_samples_per_core_s[threads];
-    state.counters["64spp_seconds"] = 500.0 * 500.0 * 64.0 / (samples / seconds);
+    state.counters["64spp_seconds"] = 500.0 * 500.0 * 64.0 / (t.samples / t.seconds);
 }
 
 // The primal cost per sample against the triangle count (the bumpy sphere, 4 spp per iteration).
@@ -277,17 +281,11 @@ void BM_TriangleCount(benchmark::State& state) {
     const std::unique_ptr<Scene> s = make_scene(kCurveRings[k]);
     RenderOptions opt;
     opt.spp = 4;
-    double seconds = 0, samples = 0;
-    for (auto _ : state) {
-        RenderStats stats;
-        render(*s, opt, &stats);
-        samples += double(stats.samples);
-        seconds += stats.seconds;
-    }
-    g_curve_seconds_per_sample[k] = seconds / samples;
+    const RenderTotals t = time_renders(state, *s, opt);
+    g_curve_seconds_per_sample[k] = t.seconds / t.samples;
     g_curve_triangles[k] = s->triangle_count();
     state.counters["triangles"] = double(g_curve_triangles[k]);
-    state.counters["samples/s"] = samples / seconds;
+    state.counters["samples/s"] = t.samples / t.seconds;
 }
 
 BENCHMARK(BM_CornellBox)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->MinTime(5.0)->UseRealTime();

@@ -149,6 +149,28 @@ TEST(SPPMPhotonMap, QueriesFindExactlyThePhotonsWithinTheRadius) {
     }
 }
 
+// scenes/sppm/<name>.xml at 32x32 (20000 photons per pass, radius 0.05) against <name>_ref32.exr (bdpt at
+// 16384 spp): the RMSE falls by 0.8 per 4x of passes and by 0.5 per 16x, is below `e64_max` at 64 passes, and
+// the image mean is within 3%. Returns the scene.
+std::unique_ptr<Scene> expect_converges_to_bdpt(const std::string& name, double e64_max) {
+    auto scene =
+        load_scene(kSceneDir + name + ".xml", {{"res", "32"}, {"photons", "20000"}, {"radius", "0.05"}});
+    const Image ref = read_image(kSceneDir + name + "_ref32.exr", false);
+    const uint64_t seed = 1 + test_seed();
+    const Image i4 = render_with(*scene, 4, seed), i16 = render_with(*scene, 16, seed);
+    const Image i64 = render_with(*scene, 64, seed);
+    const double e4 = rmse(i4, ref), e16 = rmse(i16, ref), e64 = rmse(i64, ref);
+    const double bias = image_mean(i64) / image_mean(ref) - 1.0;
+    std::printf("[sppm %s] RMSE %.4f (4 passes), %.4f (16), %.4f (64); mean error at 64 passes %.2f%%\n",
+                name.c_str(), e4, e16, e64, 100.0 * bias);
+    EXPECT_LT(e16, 0.8 * e4) << name;
+    EXPECT_LT(e64, 0.8 * e16) << name;
+    EXPECT_LT(e64, 0.5 * e4) << name;
+    EXPECT_LT(e64, e64_max) << name;
+    EXPECT_LT(std::abs(bias), 0.03) << name;
+    return scene;
+}
+
 // (a) The reference (scenes/sppm/box_ref32.exr) is bdpt at 16384 spp, 32x32 (its own RMSE ~0.0004: bdpt at
 // 64 spp is 0.0063 from it). Initial radius 0.05, 20000 photons per pass. Measured over seeds 1-7: RMSE
 // 0.0187-0.0198 at 4 passes, 0.0114-0.0122 at 16, 0.0067-0.0071 at 64 (0.0044-0.0048 at 256, seeds 1-2):
@@ -157,23 +179,7 @@ TEST(SPPMPhotonMap, QueriesFindExactlyThePhotonsWithinTheRadius) {
 // box's edges and corners; it vanishes as the radius shrinks). Thresholds: each 4x of passes must cut the
 // RMSE by 0.8 (n^-0.16) and 16x by 0.5 (n^-0.25); RMSE(64) < 0.0085 (20% above the largest measured) and a
 // mean within 3% catch a consistent but wrong image.
-TEST(SPPM, ConvergesToBdptOnADiffuseBox) {
-    const auto scene =
-        load_scene(kSceneDir + "box.xml", {{"res", "32"}, {"photons", "20000"}, {"radius", "0.05"}});
-    const Image ref = read_image(kSceneDir + "box_ref32.exr", false);
-    const uint64_t seed = 1 + test_seed();
-    const Image i4 = render_with(*scene, 4, seed), i16 = render_with(*scene, 16, seed);
-    const Image i64 = render_with(*scene, 64, seed);
-    const double e4 = rmse(i4, ref), e16 = rmse(i16, ref), e64 = rmse(i64, ref);
-    const double bias = image_mean(i64) / image_mean(ref) - 1.0;
-    std::printf("[sppm box] RMSE %.4f (4 passes), %.4f (16), %.4f (64); mean error at 64 passes %.2f%%\n", e4,
-                e16, e64, 100.0 * bias);
-    EXPECT_LT(e16, 0.8 * e4);
-    EXPECT_LT(e64, 0.8 * e16);
-    EXPECT_LT(e64, 0.5 * e4);
-    EXPECT_LT(e64, 0.0085);
-    EXPECT_LT(std::abs(bias), 0.03);
-}
+TEST(SPPM, ConvergesToBdptOnADiffuseBox) { expect_converges_to_bdpt("box", 0.0085); }
 
 // (f) Through participating media: scenes/sppm/fog_box.xml (box.xml filled with a thin haze, the ball a
 // dense chromatic forward-scattering fog: visible points and photons in two media, null-boundary crossings)
@@ -183,21 +189,8 @@ TEST(SPPM, ConvergesToBdptOnADiffuseBox) {
 // 0.28-0.39; image mean at 64 passes within -0.9%..+0.8% of bdpt's. Thresholds as in (a), RMSE(64) < 0.028
 // (20% above the largest measured). The same image with 1 and 2 threads.
 TEST(SPPM, ConvergesToBdptThroughMedia) {
-    const auto scene =
-        load_scene(kSceneDir + "fog_box.xml", {{"res", "32"}, {"photons", "20000"}, {"radius", "0.05"}});
-    const Image ref = read_image(kSceneDir + "fog_box_ref32.exr", false);
+    const auto scene = expect_converges_to_bdpt("fog_box", 0.028);
     const uint64_t seed = 1 + test_seed();
-    const Image i4 = render_with(*scene, 4, seed), i16 = render_with(*scene, 16, seed);
-    const Image i64 = render_with(*scene, 64, seed);
-    const double e4 = rmse(i4, ref), e16 = rmse(i16, ref), e64 = rmse(i64, ref);
-    const double bias = image_mean(i64) / image_mean(ref) - 1.0;
-    std::printf("[sppm fog box] RMSE %.4f (4 passes), %.4f (16), %.4f (64); mean error at 64 passes %.2f%%\n",
-                e4, e16, e64, 100.0 * bias);
-    EXPECT_LT(e16, 0.8 * e4);
-    EXPECT_LT(e64, 0.8 * e16);
-    EXPECT_LT(e64, 0.5 * e4);
-    EXPECT_LT(e64, 0.028);
-    EXPECT_LT(std::abs(bias), 0.03);
     EXPECT_EQ(render_with(*scene, 4, seed, 1).pixels, render_with(*scene, 4, seed, 2).pixels);
 }
 
