@@ -33,7 +33,7 @@ public:
     std::shared_ptr<Emitter> emitter; // area emitter, or null
     std::shared_ptr<Medium> interior, exterior;
     std::shared_ptr<Sensor> sensor;   // a nested sensor measuring the shape (irradiancemeter), or null
-    bool face_normals = false;        // ignore per-vertex normals
+    bool face_normals = false;        // ignore per-vertex normals (finalize() must follow a change)
     int vertex_param_index = -1;      // first parameter index of vertex_positions when differentiated
     // A world-space copy of a shapegroup's shape made by Scene::flatten_instances(): the group shape and the
     // instance's to_world. Its vertices are the group shape's `vertex_positions` moved by that transform.
