@@ -63,13 +63,13 @@ void Shape::build_triangle_shading() {
     for (uint32_t f = 0; f < triangles.size(); ++f) {
         const uint32_t* i = &mesh.indices[3 * size_t(f)];
         TriangleShading& c = triangles[f];
-        Vec3f dp_du;
-        triangle_normal_and_dp_du(mesh, i, mesh.positions[i[1]] - mesh.positions[i[0]],
-                                  mesh.positions[i[2]] - mesh.positions[i[0]], c.n, dp_du);
         if (flat || (mesh.normals[i[0]] == mesh.normals[i[1]] && mesh.normals[i[0]] == mesh.normals[i[2]])) {
-            c.frame = surface_interaction<float>(*this, f, Vec2f(0.f), MeshVertices{mesh}).sh_frame;
+            const SurfaceInteraction3f si = surface_interaction<float>(*this, f, Vec2f(0.f), MeshVertices{mesh});
+            c.n = si.n;
+            c.frame = si.sh_frame;
         } else {
-            c.frame.s = dp_du;
+            triangle_normal_and_dp_du(mesh, i, mesh.positions[i[1]] - mesh.positions[i[0]],
+                                      mesh.positions[i[2]] - mesh.positions[i[0]], c.n, c.frame.s);
             c.frame.n = Vec3f(std::numeric_limits<float>::quiet_NaN());
         }
     }

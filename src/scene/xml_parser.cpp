@@ -425,8 +425,8 @@ class Parser {
         if (tag == "spectrum") {
             const Attributes a = attributes(e, loc, {"name", "value", "filename"}, {"name"});
             check_name(a.at("name"), loc, "name");
-            props.set(a.at("name"),
-                              ColorValue{parse_spectrum(a, loc, parent && parent->kind == ObjectKind::Emitter)}, loc);
+            props.set(a.at("name"), ColorValue{parse_spectrum(a, loc, parent && parent->kind == ObjectKind::Emitter)},
+                      loc);
             return;
         }
         const Attributes a = attributes(e, loc, {"name", "value"}, {"name", "value"});
