@@ -121,11 +121,10 @@ void BM_PathPrimal(benchmark::State& state) {
     RenderOptions opt;
     opt.spp = 4;
     const RenderTotals t = time_renders(state, scene(), opt);
-    const double rays = t.rays, seconds = t.seconds, samples = t.samples;
-    g_path_rays_per_s = rays / seconds;
-    g_primal_seconds_per_sample = seconds / samples;
+    g_path_rays_per_s = t.rays / t.seconds;
+    g_primal_seconds_per_sample = t.seconds / t.samples;
     state.counters["rays/s"] = g_path_rays_per_s;
-    state.counters["samples/s"] = samples / seconds;
+    state.counters["samples/s"] = t.samples / t.seconds;
     state.counters["triangles"] = double(scene().triangle_count());
 }
 
