@@ -2,6 +2,7 @@
 // the normals are recomputed whenever the positions change, and the derivative estimators differentiate them
 // through the positions (diff/material_form.h, MovedVertices::normal).
 #include "diff/psdr.h"
+#include "diff/vertex_normals.h"
 #include "diff_check.h"
 #include "xml_test_util.h"
 
@@ -301,4 +302,85 @@ TEST(ShadingTerminator, ReverseModeMatchesForwardMode) {
         }
     EXPECT_GT(primary, 0.5 * scale) << "the terminator should carry most of this derivative";
     EXPECT_NEAR(lhs, reverse.values[0], 1e-4 * scale + 1e-6);
+}
+
+// The recomputed vertex normals are leaves of the tape (diff/vertex_normals.h): their tangents along a
+// direction of the positions match central differences of recompute_vertex_normals, and the chain of their
+// adjoints to the positions is the transpose of that map (⟨a, J d⟩ = ⟨Jᵀ a, d⟩).
+TEST(SmoothNormals, NormalLeavesChainToThePositions) {
+    const TempDir dir;
+    auto scene = load_scene_string(heightfield_scene(dir.write("ico.obj", icosphere_obj(2)), false));
+    Shape& shape = *scene->shapes[0];
+    Parameters params(*scene);
+    const Parameter& positions = params.find("field.vertex_positions");
+    std::vector<float> d(size_t(positions.size));
+    PCG32 rng(11);
+    for (float& x : d) x = rng.next_float() - 0.5f;
+    params.enable({{"field.vertex_positions", d}});
+    ASSERT_EQ(params.tape_dimension(), 2 * params.dimension());
+    const std::vector<float> direction = tape_direction(params);
+    const size_t V = shape.mesh.positions.size();
+    const auto normals_at = [&](float h) {
+        TriangleMesh moved = shape.mesh;
+        for (size_t v = 0; v < V; ++v)
+            moved.positions[v] += Vec3f(d[3 * v], d[3 * v + 1], d[3 * v + 2]) * h;
+        recompute_vertex_normals(moved);
+        return moved.normals;
+    };
+    const float h = 1e-3f;
+    const std::vector<Vec3f> plus = normals_at(h), minus = normals_at(-h);
+    double error = 0, size = 0;
+    for (size_t v = 0; v < V; ++v)
+        for (int k = 0; k < 3; ++k) {
+            const double fd = (double(plus[v][k]) - double(minus[v][k])) / (2.0 * h);
+            error += std::abs(direction[size_t(params.dimension()) + 3 * v + size_t(k)] - fd);
+            size += std::abs(fd);
+        }
+    EXPECT_LT(error / size, 2e-3) << "tangents of the normal leaves against central differences";
+    EXPECT_GT(size / double(V), 0.1) << "the direction must turn the normals";
+
+    std::vector<double> gradient(size_t(params.tape_dimension()), 0.0);
+    double lhs = 0;
+    for (size_t k = 0; k < 3 * V; ++k) {
+        const double a = rng.next_float() - 0.5f;
+        gradient[size_t(params.dimension()) + k] = a;
+        lhs += a * direction[size_t(params.dimension()) + k];
+    }
+    chain_vertex_normal_gradient(params, gradient);
+    ASSERT_EQ(gradient.size(), size_t(params.dimension()));
+    double rhs = 0;
+    for (size_t k = 0; k < gradient.size(); ++k) rhs += gradient[k] * d[k];
+    EXPECT_NEAR(lhs, rhs, 1e-4 * std::abs(lhs) + 1e-6);
+}
+
+// The whole estimator (interior, and the primary term at silhouettes) in both modes on the same samples: the
+// normals' adjoints chained once per pass equal their tangents along the direction.
+TEST(SmoothNormals, ReverseModeMatchesForwardModeUnderVertexPositions) {
+    const TempDir dir;
+    auto scene = load_scene_string(heightfield_scene(dir.write("ico.obj", icosphere_obj(2)), false));
+    Parameters params(*scene);
+    const Parameter& positions = params.find("field.vertex_positions");
+    std::vector<float> d(size_t(positions.size));
+    PCG32 rng(5);
+    for (float& x : d) x = rng.next_float() - 0.5f;
+    params.enable({{"field.vertex_positions", d}});
+    PsdrOptions o;
+    o.interior.spp = 4;
+    o.interior.seed = 9;
+    o.interior.path = path_settings(*scene);
+    o.primary_spp = 4;
+    o.direct_spp = o.indirect_spp = o.pixel_spp = 0;
+    const PsdrDerivative forward = psdr_derivative(*scene, params, o);
+    Image adjoint(forward.total.width, forward.total.height);
+    for (auto& a : adjoint.pixels) a = Color3f(rng.next_float(), rng.next_float(), rng.next_float());
+    const Gradient reverse = psdr_gradient(*scene, params, adjoint, o);
+    double lhs = 0, scale = 0, rhs = 0;
+    for (size_t i = 0; i < adjoint.pixels.size(); ++i)
+        for (int k = 0; k < 3; ++k) {
+            lhs += double(adjoint.pixels[i][k]) * forward.total.pixels[i][k];
+            scale += std::abs(double(adjoint.pixels[i][k]) * forward.total.pixels[i][k]);
+        }
+    for (size_t k = 0; k < reverse.values.size(); ++k) rhs += reverse.values[k] * d[k];
+    EXPECT_GT(scale, 1e-3);
+    EXPECT_NEAR(lhs, rhs, 1e-4 * scale + 1e-6);
 }

@@ -4,6 +4,7 @@
 // moving shape inside a medium) and is the identity elsewhere; J's derivative is the divergence of dX/dθ; the
 // `deform` motion's tape derivative matches finite differences of displace().
 #include "core/var.h"
+#include "diff/vertex_normals.h"
 #include "diff/material_form.h"
 #include "diff/parameters.h"
 #include "diff/volume_motion.h"
@@ -45,7 +46,7 @@ void write_obj(const std::string& path, const TriangleMesh& m) {
 // d/dt of x along the enabled direction (the tape's forward mode).
 Vec3d tangent(const Vec3<Var>& x, const Parameters& params) {
     std::vector<float> t;
-    Tape::current().forward(params.direction().data(), t);
+    Tape::current().forward(tape_direction(params).data(), t);
     const auto at = [&](const Var& v) { return v.id < 0 ? 0.0 : double(t[size_t(v.id)]); };
     return Vec3d(at(x.x), at(x.y), at(x.z));
 }

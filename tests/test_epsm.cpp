@@ -5,6 +5,7 @@
 // fixed floor point (the fixed-density EPSM of DPM-G), and a photon reflected onto the floor followed by its
 // density-estimation vertex (vertex merging, Eq. 24). Reverse mode must equal forward mode.
 #include "core/error.h"
+#include "diff/vertex_normals.h"
 #include "diff/epsm.h"
 #include "scene/scene.h"
 
@@ -86,7 +87,7 @@ struct Fixture {
         EpsmPath path;
         EXPECT_TRUE(solve_epsm(params, vertices, constraints, path));
         std::vector<float> t;
-        tape.forward(params.direction().data(), t);
+        tape.forward(tape_direction(params).data(), t);
         const auto of = [&](const Var& v) { return v.id < 0 ? 0.0 : double(t[size_t(v.id)]); };
         std::vector<V3> out;
         for (const Vec3<Var>& x : path.x) out.push_back({of(x.x), of(x.y), of(x.z)});

@@ -3,6 +3,7 @@
 // square intersection curve, B next to it and far from it), the warp at the curve with and without implicit
 // edges, and the construction time on the 220k-triangle hedge.
 #include "core/rng.h"
+#include "diff/vertex_normals.h"
 #include "diff/auxiliary_rays.h"
 #include "mesh_test_util.h"
 
@@ -258,7 +259,7 @@ NormalWarp normal_warp(const SunkCube& c, const BoundaryTest& boundary, const Ve
         for (int i = 0; i < estimates / batches; ++i) {
             Tape::current().clear();
             const WarpEstimate e = estimate_warp_at(*c.scene, *c.form, boundary, vertex, omega, o, rng);
-            Tape::current().forward(c.params->direction().data(), tangent);
+            Tape::current().forward(tape_direction(*c.params).data(), tangent);
             const auto d = [&](const Var& v) { return v.is_constant() ? 0.f : tangent[size_t(v.id)]; };
             sum += dot(Vec3f(d(e.direction.x), d(e.direction.y), d(e.direction.z)), m);
         }

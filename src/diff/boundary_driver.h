@@ -10,6 +10,7 @@
 #include "diff/first_vertex.h"
 #include "diff/parameters.h"
 #include "diff/sample_cost.h"
+#include "diff/vertex_normals.h"
 #include "render/film_footprint.h"
 #include "render/path_tracer.h"
 
@@ -113,6 +114,7 @@ Image boundary_derivative(const Scene& scene, const Parameters& params, const Bo
     const double n = double(n_samples);
     std::vector<Image> chunks(16, Image(film.width, film.height));
     std::array<SampleCost, 16> costs{};
+    const std::vector<float> direction = tape_direction(params);
     detail::for_each_sample(n_samples, options, salt, [&](int c, uint64_t i, Sampler& sampler) {
         thread_local std::vector<float> tangent;
         Tape& tape = Tape::current();
@@ -121,7 +123,7 @@ Image boundary_derivative(const Scene& scene, const Parameters& params, const Bo
         const BoundarySample b = sample(BoundarySampleIndex{i, n_samples}, sampler, rays);
         costs[c] += SampleCost{1, rays.rays, tape.size()};
         if (b.usable()) {
-            tape.forward(params.direction().data(), tangent);
+            tape.forward(direction.data(), tangent);
             for (int k = 0; k < b.n_splats; ++k) {
                 const BoundarySample::Splat& splat = b.splats[k];
                 const Color3f value = splat.weight * float(double(tangent[splat.velocity.id]) / n);
@@ -140,12 +142,13 @@ Image boundary_derivative(const Scene& scene, const Parameters& params, const Bo
 
 // Reverse mode: adds Σ_samples (Σ_j adjoint_j P_j(s)) · weight · dv/dθ / N to `gradient`.
 template <typename SampleFn>
-void boundary_gradient(const Scene& scene, const Image& adjoint, const BoundaryOptions& options, uint64_t salt,
-                       const SampleFn& sample, std::vector<double>& gradient, uint64_t count = 0) {
+void boundary_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                       const BoundaryOptions& options, uint64_t salt, const SampleFn& sample,
+                       std::vector<double>& gradient, uint64_t count = 0) {
     const Film& film = *scene.sensor->film;
     const uint64_t n_samples = detail::sample_count(film, options, count);
     const double n = double(n_samples);
-    const size_t dim = gradient.size();
+    const size_t dim = size_t(params.tape_dimension());
     tbb::enumerable_thread_specific<std::vector<double>> local([dim] { return std::vector<double>(dim, 0.0); });
     std::array<SampleCost, 16> costs{};
     detail::for_each_sample(n_samples, options, salt, [&](int c, uint64_t i, Sampler& sampler) {
@@ -168,8 +171,11 @@ void boundary_gradient(const Scene& scene, const Image& adjoint, const BoundaryO
         }
         tape.clear();
     });
+    std::vector<double> sum(dim, 0.0);
     for (const auto& g : local)
-        for (size_t k = 0; k < dim; ++k) gradient[k] += g[k];
+        for (size_t k = 0; k < dim; ++k) sum[k] += g[k];
+    chain_vertex_normal_gradient(params, sum);
+    for (size_t k = 0; k < sum.size(); ++k) gradient[k] += sum[k];
     if (options.cost)
         for (const SampleCost& c : costs) *options.cost += c;
 }

@@ -137,7 +137,7 @@ void DirectBoundary::gradient(const Parameters& params, const Image& adjoint, co
     if (edges_.empty() || scene_.emitters.empty() || !direct_paths(options.path)) return;
     const MaterialForm form(scene_, params, options.first_vertex);
     const SegmentContext context{form, options.volume_endpoints, edges_.media};
-    boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+    boundary_gradient(scene_, params, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
         return sample_emitter_boundary(scene_, edges_, context, 0, 0, options.path, index, sampler, rays);
     }, gradient);
 }

@@ -6,6 +6,7 @@
 #include "diff/material_form.h"
 #include "diff/photon_path.h"
 #include "diff/pixel_driver.h"
+#include "diff/vertex_normals.h"
 #include "render/light_medium.h"
 #include "render/photon_gather.h"
 #include "render/photon_tracing.h"
@@ -166,11 +167,12 @@ struct ReverseSweep {
     void run() { Tape::current().backward(seeds, gradient.data(), scratch); }
 };
 
-// Σ of the threads' gradients.
-std::vector<double> total(const tbb::enumerable_thread_specific<ReverseSweep>& sweeps, size_t dim) {
-    std::vector<double> sum(dim, 0.0);
+// Σ of the threads' gradients (tape_dimension() values), chained to the parameters.
+std::vector<double> total(const Parameters& params, const tbb::enumerable_thread_specific<ReverseSweep>& sweeps) {
+    std::vector<double> sum(size_t(params.tape_dimension()), 0.0);
     for (const ReverseSweep& s : sweeps)
-        for (size_t k = 0; k < dim; ++k) sum[k] += s.gradient[k];
+        for (size_t k = 0; k < sum.size(); ++k) sum[k] += s.gradient[k];
+    chain_vertex_normal_gradient(params, sum);
     return sum;
 }
 
@@ -190,6 +192,7 @@ DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const
         })
                                          : std::function<void(float)>();
         tbb::enumerable_thread_specific<std::vector<float>> tangents;
+        const std::vector<float> direction = tape_direction(params);
         const float inv = 1.f / float(o.spp);
         // Pixels are disjoint within a pass's tiles: each pixel is written by one thread at a time.
         for_each_path(
@@ -197,7 +200,7 @@ DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const
             [&](uint64_t pixel, const Color3f& l) { primal.pixels[pixel] += l * inv; },
             [&](const PathSample& s) {
                 std::vector<float>& tangent = tangents.local();
-                Tape::current().forward(params.direction().data(), tangent);
+                Tape::current().forward(direction.data(), tangent);
                 const Color3f d(tangent_of(s.value.x, tangent), tangent_of(s.value.y, tangent),
                                 tangent_of(s.value.z, tangent));
                 const Color3f value(s.value.x.v, s.value.y.v, s.value.z.v);
@@ -235,7 +238,7 @@ Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image&
     check_options(scene, params, o);
     const Film& film = *scene.sensor->film;
     check_adjoint_size(film, adjoint);
-    const size_t dim = size_t(params.dimension());
+    const size_t dim = size_t(params.tape_dimension());
     tbb::enumerable_thread_specific<ReverseSweep> sweeps([dim] { return ReverseSweep(dim); });
     Gradient out{{}, {}, Image(film.width, film.height), 0.0, {}};
     const float inv = 1.f / float(o.spp);
@@ -248,7 +251,7 @@ Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image&
             sweep.seeds = {{s.value.x.id, a.x}, {s.value.y.id, a.y}, {s.value.z.id, a.z}};
             sweep.run();
         });
-    out.values = total(sweeps, dim);
+    out.values = total(params, sweeps);
     out.warnings = settings_warnings(scene);
     out.seconds = seconds_since(start);
     return out;
@@ -277,7 +280,7 @@ DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, 
 
     // Second run: each sampled path estimates its pixel's dI/dθ (its value's scale) and dp/dθ (its screen
     // motion, weighted by its share of the pixel's samples: the pixel fraction, paths, EPSMs and passes).
-    const size_t dim = size_t(params.dimension());
+    const size_t dim = size_t(params.tape_dimension());
     tbb::enumerable_thread_specific<ReverseSweep> sweeps([dim] { return ReverseSweep(dim); });
     const float shares = float(o.pixel_fraction) * float(o.paths) * float(o.variant == DpmVariant::C ? 1 : 2) *
                          float(o.spp);
@@ -297,7 +300,7 @@ DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, 
         });
     DpmMatching out;
     out.loss = loss.value;
-    out.gradient = Gradient{total(sweeps, dim), settings_warnings(scene), primal, 0.0, {}};
+    out.gradient = Gradient{total(params, sweeps), settings_warnings(scene), primal, 0.0, {}};
     out.gradient.seconds = seconds_since(start);
     return out;
 }

@@ -141,11 +141,11 @@ bool solve_epsm(const Parameters& params, const std::vector<EpsmVertex>& vertice
     std::vector<Vec2<Var>> bary(vertices.size(), Vec2<Var>(Var(0.f)));
     for (size_t i = 0; i < vertices.size(); ++i) bary[i] = Vec2<Var>(vertices[i].bary);
 
-    // ∂C/∂X: the constraints with the unknowns as scratch leaves (parameter indices past θ's), one forward
+    // ∂C/∂X: the constraints with the unknowns as scratch leaves (indices past the tape's leaves), one forward
     // sweep per unknown; then the scratch is dropped.
     Tape& tape = Tape::current();
     const size_t first = tape.size(), first_leaf = tape.leaf_count();
-    const int dim = params.dimension();
+    const int dim = params.tape_dimension();
     std::vector<Vec2<Var>> leaves = bary;
     for (size_t i = 0; i < vertices.size(); ++i)
         if (unknown[i] >= 0)

@@ -138,11 +138,11 @@ void IndirectBoundary::gradient(const Parameters& params, const Image& adjoint, 
     const SegmentContext context{form, options.volume_endpoints, edges_.media};
     const int t_max = max_detector_depth(options.path, 1);
     if (!scene_.emitters.empty() && (t_max < 0 || t_max >= 1)) {
-        boundary_gradient(scene_, adjoint, options, EmitterSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+        boundary_gradient(scene_, params, adjoint, options, EmitterSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
             return sample_emitter_boundary(scene_, edges_, context, 1, t_max, options.path, index, sampler, rays);
         }, gradient);
     }
-    boundary_gradient(scene_, adjoint, options, DirectionalSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+    boundary_gradient(scene_, params, adjoint, options, DirectionalSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
         return sample_directional(scene_, edges_, context, options.path, index, sampler, rays);
     }, gradient);
 }

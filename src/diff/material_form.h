@@ -42,10 +42,11 @@ struct MovedVertices {
     // Vertex normals rotate with rotations; translations and uniform scaling leave them unchanged; a
     // deformation turns them by the inverse transpose of its gradient, n - θ ∇φ (d·n) to first order (the
     // surface normalizes them). Under vertex_positions they are recomputed from the positions (as Mitsuba 3's
-    // Mesh::parameters_changed does), so they move with the vertices around them.
+    // Mesh::parameters_changed does): leaves of the tape whose derivatives are chained to the positions once
+    // per pass (diff/vertex_normals.h).
     Vec3<Var> normal(uint32_t v) const {
         const Vec3f n0 = shape.mesh.normals[v];
-        Vec3<Var> n = shape.vertex_index() >= 0 ? smooth_normal(v) : Vec3<Var>(n0);
+        Vec3<Var> n = shape.vertex_normal_index() >= 0 ? recomputed_normal_leaf(v) : Vec3<Var>(n0);
         for (const Motion& m : motions)
             if (m.kind == Parameter::Kind::Rotate) n += Vec3<Var>(cross(m.vector, n0)) * Var::parameter(0.f, m.index);
             else if (m.kind == Parameter::Kind::Deform)
@@ -55,28 +56,16 @@ struct MovedVertices {
     }
 
 private:
-    // n(v) = normalize(Σ_f corner_normal(f, v)) over the faces around v (recompute_vertex_normals) on the tape,
-    // from the vertex_positions leaves; a flattened instance copy's is its group shape's, transformed as
-    // TriangleMesh::apply_transform does. The value is the stored normal, the derivative the recomputed one's.
-    Vec3<Var> smooth_normal(uint32_t v) const {
+    // The value is the stored normal, the derivative the recomputed one's; a flattened instance copy's is its
+    // group shape's transformed as TriangleMesh::apply_transform does.
+    Vec3<Var> recomputed_normal_leaf(uint32_t v) const {
         const Vec3f n0 = shape.mesh.normals[v];
-        const Shape& owner = shape.group_shape ? *shape.group_shape : shape;
-        const int base = shape.vertex_index();
-        const auto at = [&](uint32_t w) {
-            const Vec3f g = owner.mesh.positions[w];
-            return Vec3<Var>(Var::parameter(g.x, base + 3 * int(w)), Var::parameter(g.y, base + 3 * int(w) + 1),
-                             Var::parameter(g.z, base + 3 * int(w) + 2));
-        };
-        Vec3<Var> sum(Var(0.f));
-        const auto [first, last] = owner.faces_around(v);
-        for (const uint32_t* f = first; f != last; ++f) {
-            const uint32_t* i = &owner.mesh.indices[3 * size_t(*f)];
-            const Vec3<Var> p[3] = {at(i[0]), at(i[1]), at(i[2])};
-            sum += corner_normal(p, i[0] == v ? 0 : i[1] == v ? 1 : 2);
-        }
-        if (!(norm(sum).v > 0.f)) return Vec3<Var>(n0);
-        Vec3<Var> n = normalize(sum);
-        if (shape.group_shape) n = normalize(shape.instance_to_world.apply_normal(n));
+        const int base = shape.vertex_normal_index() + 3 * int(v);
+        if (!shape.group_shape)
+            return Vec3<Var>(Var::parameter(n0.x, base), Var::parameter(n0.y, base + 1), Var::parameter(n0.z, base + 2));
+        const Vec3f g = shape.group_shape->mesh.normals[v];
+        const Vec3<Var> n = normalize(shape.instance_to_world.apply_normal(
+            Vec3<Var>(Var::parameter(g.x, base), Var::parameter(g.y, base + 1), Var::parameter(g.z, base + 2))));
         return Vec3<Var>(Var(n0.x, n.x.id), Var(n0.y, n.y.id), Var(n0.z, n.z.id));
     }
 };

@@ -237,7 +237,9 @@ void Parameters::disable_all() {
         if (p->index) *p->index = -1;
     enabled_.clear();
     direction_.clear();
-    dimension_ = 0;
+    dimension_ = tape_dimension_ = 0;
+    for (Shape* shape : normal_leaf_shapes_) shape->vertex_normal_param_index = -1;
+    normal_leaf_shapes_.clear();
     shape_motions_.clear();
     sensor_motions_.clear();
     emitter_motions_.clear();
@@ -302,6 +304,13 @@ void Parameters::enable(const std::vector<std::pair<std::string, std::vector<flo
                 shape_motions_[shape].push_back(m);
         }
     }
+    tape_dimension_ = dimension_;
+    for (const auto& [p, index] : enabled_)
+        if (p->kind == Parameter::Kind::Data && p->geometry && p->shape && !p->shape->flat_shading()) {
+            p->shape->vertex_normal_param_index = tape_dimension_;
+            tape_dimension_ += p->size;
+            normal_leaf_shapes_.push_back(p->shape);
+        }
 }
 
 void Parameters::enable_all_data() {

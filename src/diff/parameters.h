@@ -91,6 +91,11 @@ public:
 
     // Dimension of the enabled parameter vector, and the direction (forward mode) in it.
     int dimension() const { return dimension_; }
+    // The tape's leaves: the parameters, then the recomputed vertex normals of the meshes whose vertex
+    // positions are enabled and shaded with vertex normals (diff/vertex_normals.h). Forward and reverse sweeps
+    // take vectors of this size.
+    int tape_dimension() const { return tape_dimension_; }
+    const std::vector<Shape*>& normal_leaf_shapes() const { return normal_leaf_shapes_; }
     const std::vector<float>& direction() const { return direction_; }
     // Replaces the direction (dimension() values): a motion's θ may then move at another rate than 1.
     void set_direction(const std::vector<float>& direction);
@@ -123,7 +128,8 @@ public:
     std::vector<Parameter> all_;
     std::vector<std::pair<const Parameter*, int>> enabled_;
     std::vector<float> direction_;
-    int dimension_ = 0;
+    int dimension_ = 0, tape_dimension_ = 0;
+    std::vector<Shape*> normal_leaf_shapes_;
     std::map<const Shape*, std::vector<Motion>> shape_motions_;
     std::vector<Motion> sensor_motions_;
     std::map<const Emitter*, std::vector<Motion>> emitter_motions_;

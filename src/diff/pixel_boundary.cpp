@@ -135,7 +135,7 @@ void PixelBoundary::gradient(const Parameters& params, const Image& adjoint, con
     const MaterialForm form(scene_, params, options.first_vertex);
     const bool media = scene_has_media(scene_);
     const PixelEdges grid = pixel_edges(*scene_.sensor->film, options, strata_);
-    boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+    boundary_gradient(scene_, params, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
         return sample_pixel_edge(scene_, form, media, velocity_, grid, options.path, options.seed ^ Salt, index.i, sampler, rays);
     }, gradient, grid.samples());
 }

@@ -3,6 +3,7 @@
 #include "core/batch_stats.h"
 #include "core/interrupt.h"
 #include "core/seconds.h"
+#include "diff/vertex_normals.h"
 #include "render/tiles.h"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -69,8 +70,10 @@ struct PixelSums {
 
 // A tile's forward-mode sums: each sample's tangents along params.direction(), corrected by the tile.
 struct ForwardPixels {
-    ForwardPixels(const PixelLoop& l, TileSamples& t, PixelSums& o) : loop(l), tile(t), out(o) {}
+    ForwardPixels(const PixelLoop& l, const std::vector<float>& d, TileSamples& t, PixelSums& o)
+        : loop(l), direction(d), tile(t), out(o) {}
     const PixelLoop& loop;
+    const std::vector<float>& direction; // tape_direction(loop.params)
     TileSamples& tile;
     PixelSums& out;
     std::vector<float> tangent;
@@ -81,7 +84,7 @@ struct ForwardPixels {
         tile.begin_pixel(x, y);
     }
     void add(const Color3<Var>& v) {
-        Tape::current().forward(loop.params.direction().data(), tangent);
+        Tape::current().forward(direction.data(), tangent);
         Vec3d d(tangent_of(v.x, tangent), tangent_of(v.y, tangent), tangent_of(v.z, tangent));
         tile.correct(tangent, d);
         primal += Vec3d(v.x.v, v.y.v, v.z.v);
@@ -154,8 +157,9 @@ DerivativeImage pixel_derivative(const PixelLoop& loop) {
                             : std::function<void(float)>();
         const uint64_t seed = loop.options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b);
         PixelSums s{Image(film.width, film.height), Image(film.width, film.height)};
+        const std::vector<float> direction = tape_direction(loop.params);
         for_each_sample(loop, seed, progress, cost,
-                        [&](TileSamples& tile) { return ForwardPixels(loop, tile, s); });
+                        [&](TileSamples& tile) { return ForwardPixels(loop, direction, tile, s); });
         if (loop.film_edge) {
             SampleCost edge_cost;
             const Image edges =
@@ -176,10 +180,10 @@ Gradient pixel_gradient(const PixelLoop& loop, const Image& adjoint) {
     const Film& film = *loop.scene.sensor->film;
     check_adjoint_size(film, adjoint);
     if (loop.options.spp <= 0) throw Error("gradient: spp must be positive");
-    const size_t dim = size_t(loop.params.dimension());
+    const size_t dim = size_t(loop.params.tape_dimension());
     tbb::enumerable_thread_specific<std::vector<double>> gradients(
         [dim] { return std::vector<double>(dim, 0.0); });
-    Gradient result{std::vector<double>(dim, 0.0), {}, Image(film.width, film.height), 0.0, {}};
+    Gradient result{std::vector<double>(size_t(loop.params.dimension()), 0.0), {}, Image(film.width, film.height), 0.0, {}};
     if (!loop.unwarped_delta_lights.empty())
         for (const auto& e : loop.scene.emitters)
             if (e->is_delta() && !e->is_infinite()) {
@@ -199,9 +203,11 @@ Gradient pixel_gradient(const PixelLoop& loop, const Image& adjoint) {
         cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
     }
     result.cost = cost.get();
+    std::vector<double> sum(dim, 0.0);
     for (const std::vector<double>& g : gradients)
-        for (size_t k = 0; k < dim; ++k)
-            result.values[k] += g[k];
+        for (size_t k = 0; k < dim; ++k) sum[k] += g[k];
+    chain_vertex_normal_gradient(loop.params, sum);
+    for (size_t k = 0; k < sum.size(); ++k) result.values[k] += sum[k];
     result.seconds = seconds_since(loop.start);
     return result;
 }

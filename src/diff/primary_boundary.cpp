@@ -576,7 +576,7 @@ void PrimaryBoundary::gradient(const Parameters& params, const Image& adjoint, c
     const MaterialForm form(scene_, params, options.first_vertex);
     const auto silhouettes = prepare(scene_, edges_, params, form, options);
     if (silhouettes->edges.empty() && silhouettes->terminators.empty()) return;
-    boundary_gradient(scene_, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+    boundary_gradient(scene_, params, adjoint, options, Salt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
         return sample_boundary(scene_, *silhouettes, form, index, sampler, options.path, rays);
     }, gradient);
 }

@@ -35,6 +35,8 @@ public:
     std::shared_ptr<Sensor> sensor;   // a nested sensor measuring the shape (irradiancemeter), or null
     bool face_normals = false;        // ignore per-vertex normals (finalize() must follow a change)
     int vertex_param_index = -1;      // first parameter index of vertex_positions when differentiated
+    int vertex_normal_param_index = -1; // first tape leaf index of its recomputed vertex normals, then
+                                        // (diff/vertex_normals.h)
     // A world-space copy of a shapegroup's shape made by Scene::flatten_instances(): the group shape and the
     // instance's to_world. Its vertices are the group shape's `vertex_positions` moved by that transform.
     const Shape* group_shape = nullptr;
@@ -42,6 +44,10 @@ public:
 
     // First parameter index of the vertex positions that move this mesh: its own, or its group shape's.
     int vertex_index() const { return group_shape ? group_shape->vertex_param_index : vertex_param_index; }
+    // First tape leaf index of the recomputed vertex normals of this mesh (its group shape's), or -1.
+    int vertex_normal_index() const {
+        return group_shape ? group_shape->vertex_normal_param_index : vertex_normal_param_index;
+    }
     // A flattened copy: the mesh recomputed from the group shape's (positions by to_world, normals by its
     // inverse transpose, as TriangleMesh::apply_transform); finalize() must follow.
     void update_from_group();

@@ -1,0 +1,28 @@
+// The recomputed vertex normals of a mesh whose `vertex_positions` are differentiated (Mitsuba 3's
+// Mesh::parameters_changed recomputes them from the positions, so they move with the vertices around them).
+// n(v) = normalize(Σ_f corner_normal(f, v)) depends on the whole one-ring of v; instead of recording that on the
+// tape at every hit, each normal is a leaf of the tape with an index past the parameters'
+// (Shape::vertex_normal_index(), Parameters::tape_dimension()), and its derivative is chained to the positions
+// once per pass: its tangent along the direction before a forward-mode pass (tape_direction), its adjoint back
+// to the positions after a reverse-mode pass (chain_vertex_normal_gradient).
+#pragma once
+#include "core/var.h"
+#include "diff/parameters.h"
+
+#include <vector>
+
+namespace penumbra {
+
+// n(v) of `owner` (a mesh with differentiated positions) on the tape, from leaves of its vertex positions
+// (recompute_vertex_normals' formula); its stored normal when the faces around v have no area.
+Vec3<Var> recomputed_vertex_normal(const Shape& owner, uint32_t v);
+
+// The direction of a forward-mode pass in the tape's leaves: params.direction(), then the tangent of every
+// recomputed vertex normal along it (tape_dimension() values). Evaluated at the current geometry.
+std::vector<float> tape_direction(const Parameters& params);
+
+// After a reverse-mode pass into `gradient` (tape_dimension() values): the adjoints of the vertex normals are
+// swept back to the vertex positions, and `gradient` is cut to params.dimension().
+void chain_vertex_normal_gradient(const Parameters& params, std::vector<double>& gradient);
+
+} // namespace penumbra
