@@ -152,6 +152,30 @@ std::string icosphere_obj(int levels) {
     return obj.str();
 }
 
+// psdr in both modes on the same samples (one batch) with a random adjoint a: ⟨a, J v⟩ of the forward image
+// (lhs) against ⟨Jᵀ a, v⟩ of the gradient (rhs), v = params.direction(); scale = Σ|a J v|, and the forward
+// result.
+struct DotProducts {
+    double lhs = 0, rhs = 0, scale = 0;
+    PsdrDerivative forward;
+    Image adjoint;
+};
+DotProducts dot_products(const Scene& scene, const Parameters& params, const PsdrOptions& o, uint64_t seed) {
+    DotProducts r;
+    r.forward = psdr_derivative(scene, params, o);
+    r.adjoint = Image(r.forward.total.width, r.forward.total.height);
+    PCG32 rng(seed);
+    for (auto& a : r.adjoint.pixels) a = Color3f(rng.next_float(), rng.next_float(), rng.next_float());
+    const Gradient reverse = psdr_gradient(scene, params, r.adjoint, o);
+    for (size_t i = 0; i < r.adjoint.pixels.size(); ++i)
+        for (int k = 0; k < 3; ++k) {
+            r.lhs += double(r.adjoint.pixels[i][k]) * r.forward.total.pixels[i][k];
+            r.scale += std::abs(double(r.adjoint.pixels[i][k]) * r.forward.total.pixels[i][k]);
+        }
+    for (size_t k = 0; k < reverse.values.size(); ++k) r.rhs += reverse.values[k] * params.direction()[k];
+    return r;
+}
+
 } // namespace
 
 // Setting vertex_positions recomputes the smooth normals from the new positions (set_values, and displace for
@@ -287,21 +311,12 @@ TEST(ShadingTerminator, ReverseModeMatchesForwardMode) {
     o.interior.path = path_settings(*scene);
     o.primary_spp = 8;
     o.direct_spp = o.indirect_spp = o.pixel_spp = 0;
-    const PsdrDerivative forward = psdr_derivative(*scene, params, o);
-    Image adjoint(forward.total.width, forward.total.height);
-    PCG32 rng(3);
-    for (auto& a : adjoint.pixels)
-        a = Color3f(rng.next_float(), rng.next_float(), rng.next_float());
-    const Gradient reverse = psdr_gradient(*scene, params, adjoint, o);
-    double lhs = 0, scale = 0, primary = 0;
-    for (size_t i = 0; i < adjoint.pixels.size(); ++i)
-        for (int k = 0; k < 3; ++k) {
-            lhs += double(adjoint.pixels[i][k]) * forward.total.pixels[i][k];
-            scale += std::abs(double(adjoint.pixels[i][k]) * forward.total.pixels[i][k]);
-            primary += std::abs(double(adjoint.pixels[i][k]) * forward.primary.pixels[i][k]);
-        }
-    EXPECT_GT(primary, 0.5 * scale) << "the terminator should carry most of this derivative";
-    EXPECT_NEAR(lhs, reverse.values[0], 1e-4 * scale + 1e-6);
+    const DotProducts r = dot_products(*scene, params, o, 3);
+    double primary = 0;
+    for (size_t i = 0; i < r.adjoint.pixels.size(); ++i)
+        for (int k = 0; k < 3; ++k) primary += std::abs(double(r.adjoint.pixels[i][k]) * r.forward.primary.pixels[i][k]);
+    EXPECT_GT(primary, 0.5 * r.scale) << "the terminator should carry most of this derivative";
+    EXPECT_NEAR(r.lhs, r.rhs, 1e-4 * r.scale + 1e-6);
 }
 
 // The recomputed vertex normals are leaves of the tape (diff/vertex_normals.h): their tangents along a
@@ -370,17 +385,7 @@ TEST(SmoothNormals, ReverseModeMatchesForwardModeUnderVertexPositions) {
     o.interior.path = path_settings(*scene);
     o.primary_spp = 4;
     o.direct_spp = o.indirect_spp = o.pixel_spp = 0;
-    const PsdrDerivative forward = psdr_derivative(*scene, params, o);
-    Image adjoint(forward.total.width, forward.total.height);
-    for (auto& a : adjoint.pixels) a = Color3f(rng.next_float(), rng.next_float(), rng.next_float());
-    const Gradient reverse = psdr_gradient(*scene, params, adjoint, o);
-    double lhs = 0, scale = 0, rhs = 0;
-    for (size_t i = 0; i < adjoint.pixels.size(); ++i)
-        for (int k = 0; k < 3; ++k) {
-            lhs += double(adjoint.pixels[i][k]) * forward.total.pixels[i][k];
-            scale += std::abs(double(adjoint.pixels[i][k]) * forward.total.pixels[i][k]);
-        }
-    for (size_t k = 0; k < reverse.values.size(); ++k) rhs += reverse.values[k] * d[k];
-    EXPECT_GT(scale, 1e-3);
-    EXPECT_NEAR(lhs, rhs, 1e-4 * scale + 1e-6);
+    const DotProducts r = dot_products(*scene, params, o, 6);
+    EXPECT_GT(r.scale, 1e-3);
+    EXPECT_NEAR(r.lhs, r.rhs, 1e-4 * r.scale + 1e-6);
 }
