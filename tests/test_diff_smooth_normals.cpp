@@ -87,6 +87,17 @@ const char* const TiltedQuadObj = "v -3 -3 0\nv 3 -3 0\nv 3 3 0\nv -3 3 0\n"
                                   "vn -1 0.3 -0.5\nvn 0.3 0 1\nvn 0.3 0 1\nvn -1 -0.3 -0.5\n"
                                   "f 1//1 2//2 3//3\nf 1//1 3//3 4//4\n";
 
+// psdr with the interior term and the primary term only (no shadows, no indirect boundaries).
+PsdrOptions interior_and_primary(const Scene& scene, int spp, uint64_t seed, int primary_spp) {
+    PsdrOptions o;
+    o.interior.spp = spp;
+    o.interior.seed = seed;
+    o.interior.path = path_settings(scene);
+    o.primary_spp = primary_spp;
+    o.direct_spp = o.indirect_spp = o.pixel_spp = 0;
+    return o;
+}
+
 // psdr (interior + primary term, which samples the terminator) against finite differences; with
 // primary_spp = 0 (the interior term alone) the check must fail.
 void expect_terminator_matches_fd(const std::string& param) {
@@ -96,13 +107,8 @@ void expect_terminator_matches_fd(const std::string& param) {
     auto scene = load_scene_string(terminator_scene(dir.write("quad.obj", TiltedQuadObj)));
     Parameters params(*scene);
     params.enable({parse_param_selection(param)});
-    PsdrOptions o;
-    o.interior.spp = 8;
+    PsdrOptions o = interior_and_primary(*scene, 8, 5 + 1000 * seed, 8);
     o.interior.batches = 16;
-    o.interior.seed = 5 + 1000 * seed;
-    o.interior.path = path_settings(*scene);
-    o.primary_spp = 8;
-    o.direct_spp = o.indirect_spp = o.pixel_spp = 0; // no shadows; the quad's edges are off the film
     const PsdrDerivative d = psdr_derivative(*scene, params, o);
     RenderOptions ro;
     ro.spp = 64;
@@ -305,12 +311,7 @@ TEST(ShadingTerminator, ReverseModeMatchesForwardMode) {
     auto scene = load_scene_string(terminator_scene(dir.write("quad.obj", TiltedQuadObj)));
     Parameters params(*scene);
     params.enable({parse_param_selection("quad.translate=1,0.3,0")});
-    PsdrOptions o;
-    o.interior.spp = 4;
-    o.interior.seed = 5;
-    o.interior.path = path_settings(*scene);
-    o.primary_spp = 8;
-    o.direct_spp = o.indirect_spp = o.pixel_spp = 0;
+    PsdrOptions o = interior_and_primary(*scene, 4, 5, 8);
     const DotProducts r = dot_products(*scene, params, o, 3);
     double primary = 0;
     for (size_t i = 0; i < r.adjoint.pixels.size(); ++i)
@@ -379,12 +380,7 @@ TEST(SmoothNormals, ReverseModeMatchesForwardModeUnderVertexPositions) {
     PCG32 rng(5);
     for (float& x : d) x = rng.next_float() - 0.5f;
     params.enable({{"field.vertex_positions", d}});
-    PsdrOptions o;
-    o.interior.spp = 4;
-    o.interior.seed = 9;
-    o.interior.path = path_settings(*scene);
-    o.primary_spp = 4;
-    o.direct_spp = o.indirect_spp = o.pixel_spp = 0;
+    PsdrOptions o = interior_and_primary(*scene, 4, 9, 4);
     const DotProducts r = dot_products(*scene, params, o, 6);
     EXPECT_GT(r.scale, 1e-3);
     EXPECT_NEAR(r.lhs, r.rhs, 1e-4 * r.scale + 1e-6);
