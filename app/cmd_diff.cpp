@@ -1,6 +1,7 @@
 // `penumbra params | derivative | gradient | fd | compare`: differentiation from the command line.
 #include "cli.h"
 
+#include "core/atomic_file.h"
 #include "diff/budget.h"
 #include "diff/finite_difference.h"
 #include "diff/interior.h"
@@ -13,8 +14,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <map>
 #include <set>
 
@@ -221,15 +220,7 @@ void cmd_gradient(const Common& c) {
         out["parameters"].push_back({{"name", p->name}, {"size", p->size}, {"gradient", values}});
         std::printf("%-48s %8d  |dL/dθ| = %.6g\n", p->name.c_str(), p->size, std::sqrt(norm2));
     }
-    if (!c.output.empty()) {
-        const std::string tmp = c.output + ".tmp";
-        {
-            std::ofstream file(tmp);
-            file << out.dump(1) << "\n";
-            if (!file) throw Error("cannot write '" + c.output + "'");
-        }
-        std::filesystem::rename(tmp, c.output);
-    }
+    if (!c.output.empty()) write_text_atomically(c.output, out.dump(1) + "\n");
     std::fprintf(stderr, "gradient of %d parameter scalars at %d spp in %.2f s%s%s\n", params.dimension(), c.spp,
                  g.seconds, c.output.empty() ? "" : " -> ", c.output.c_str());
 }

@@ -3,6 +3,7 @@
 // derivative methods (paper 001 §7: psdr against a DTRT-like baseline; src/diff/equal_time.h).
 #include "cli.h"
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "diff/equal_time.h"
 #include "diff/parameters.h"
@@ -11,7 +12,6 @@
 #include "scene/scene.h"
 
 #include <cstdio>
-#include <fstream>
 
 namespace penumbra::cli {
 
@@ -61,11 +61,8 @@ void add_variance_study(CLI::App& app) {
         if (!opt->quiet) std::fprintf(stderr, "\n");
         const std::string table = variance_study_markdown(study);
         std::printf("%s", table.c_str());
-        for (const std::string& path : opt->outputs) {
-            std::ofstream out(path);
-            out << (lower_extension(path) == ".md" ? table : variance_study_json(study));
-            if (!out) throw Error("cannot write '" + path + "'");
-        }
+        for (const std::string& path : opt->outputs)
+            write_text_atomically(path, lower_extension(path) == ".md" ? table : variance_study_json(study));
     });
 }
 
@@ -169,11 +166,7 @@ void add_equal_time(CLI::App& app) {
             equal_time_study(*scene, params, methods, opt->study, reference, reference_stderr);
         const std::string table = equal_time_markdown(rows, !reference.pixels.empty());
         std::printf("%s", table.c_str());
-        if (!opt->output.empty()) {
-            std::ofstream out(opt->output);
-            out << table;
-            if (!out) throw Error("cannot write '" + opt->output + "'");
-        }
+        if (!opt->output.empty()) write_text_atomically(opt->output, table);
     });
 }
 

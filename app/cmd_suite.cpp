@@ -3,6 +3,7 @@
 // relerr4, the reference's own noise, the z-score of the image mean and the times, as a markdown table.
 #include "cli.h"
 
+#include "core/atomic_file.h"
 #include "core/colormap.h"
 #include "core/error.h"
 #include "diff/ad_suite.h"
@@ -15,7 +16,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 namespace penumbra::cli {
@@ -48,16 +48,6 @@ struct Row {
     double derivative_seconds = 0, fd_seconds = 0;
     bool fd_cached = false;
 };
-
-void write_text(const std::string& path, const std::string& text) {
-    const std::string tmp = path + ".tmp";
-    {
-        std::ofstream file(tmp);
-        file << text;
-        if (!file) throw Error("cannot write '" + path + "'");
-    }
-    fs::rename(tmp, path);
-}
 
 struct Reference {
     FiniteDifference fd;
@@ -170,7 +160,7 @@ void cmd_suite(const SuiteOptions& o) {
         std::fflush(stdout);
         report += row;
     }
-    if (!o.output.empty()) write_text(o.output, report);
+    if (!o.output.empty()) write_text_atomically(o.output, report);
     if (!o.quiet) std::fprintf(stderr, "images and references in %s%s%s\n", o.cache.c_str(), o.output.empty() ? "" : ", table in ",
                                o.output.c_str());
 }

@@ -8,6 +8,7 @@
 //    vertex positions) against the primal pass at the same samples per pixel (their time ratio per sample);
 //  - the cost model of the sample budgets (diff/sample_cost.h): seconds per counted cost unit of each pass,
 //    relative to the forward-mode interior's (1 everywhere if the model were exact).
+#include "core/atomic_file.h"
 #include "core/distribution.h"
 #include "core/rng.h"
 #include "core/warp.h"
@@ -27,7 +28,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
+#include <sstream>
 
 using namespace penumbra;
 
@@ -54,7 +55,7 @@ std::string write_bumpy_sphere(const std::filesystem::path& dir, int kRings) {
             f.push_back({b, c, d});
         }
     const std::string path = (dir / ("bumpy" + std::to_string(kRings) + ".ply")).string();
-    std::ofstream out(path, std::ios::binary);
+    std::ostringstream out; // written atomically: benchmarks running at once share the file
     out << "ply\nformat binary_little_endian 1.0\nelement vertex " << v.size()
         << "\nproperty float x\nproperty float y\nproperty float z\nelement face " << f.size()
         << "\nproperty list uchar uint vertex_indices\nend_header\n";
@@ -64,6 +65,7 @@ std::string write_bumpy_sphere(const std::filesystem::path& dir, int kRings) {
         out.write(reinterpret_cast<const char*>(&n), 1);
         out.write(reinterpret_cast<const char*>(t.data()), 12);
     }
+    write_text_atomically(path, out.str());
     return path;
 }
 

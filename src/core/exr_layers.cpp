@@ -1,5 +1,6 @@
 #include "core/exr_layers.h"
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 
 #include <Imath/half.h>
@@ -11,7 +12,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 
 namespace penumbra {
 
@@ -56,19 +56,11 @@ void write_exr_channels(const std::string& path, int width, int height,
         header.channels().insert(ch.name, Imf::Channel(type));
         fb.insert(ch.name, Imf::Slice(type, base, bytes, bytes * size_t(width)));
     }
-    const std::string tmp = path + ".tmp";
-    try {
+    write_file_atomically(path, [&](const std::string& tmp) {
         Imf::OutputFile file(tmp.c_str(), header);
         file.setFrameBuffer(fb);
         file.writePixels(height);
-    } catch (const std::exception& e) {
-        std::remove(tmp.c_str());
-        throw Error("cannot write '" + path + "': " + e.what());
-    }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-        std::remove(tmp.c_str());
-        throw Error("cannot write '" + path + "': rename failed");
-    }
+    });
 }
 
 } // namespace penumbra

@@ -17,8 +17,8 @@ struct ExrChannel {
 };
 
 // All channels must hold width * height values. UInt32 stores round(clamp(v, 0, 1) (2^32 - 1))
-// (Mitsuba's Bitmap marks integer components as normalized). Written to a
-// temporary file and renamed; throws Error on failure.
+// (Mitsuba's Bitmap marks integer components as normalized). Written atomically (core/atomic_file.h); throws
+// Error on failure.
 void write_exr_channels(const std::string& path, int width, int height,
                         const std::vector<ExrChannel>& channels, ComponentFormat format);
 

@@ -1,7 +1,8 @@
 // Image file I/O: OpenEXR through OpenEXR 3 (linear float data), 8/16-bit and Radiance HDR formats through
-// stb_image, PNG output through stb_image_write. Writes go to `path + ".tmp"` and are renamed into place.
+// stb_image, PNG output through stb_image_write. Writes are atomic (core/atomic_file.h).
 #include "core/image.h"
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 
 #include <OpenEXR/ImfChannelList.h>
@@ -143,19 +144,6 @@ void write_png_data(const std::string& path, int width, int height, int channels
         throw std::runtime_error("cannot write PNG data");
 }
 
-// Writes through `path + ".tmp"`, renamed into place on success.
-template <typename Write> void write_atomically(const std::string& path, const Write& write) {
-    const std::string tmp = path + ".tmp";
-    try {
-        write(tmp);
-        std::filesystem::rename(tmp, path);
-    } catch (const std::exception& e) {
-        std::error_code ignored;
-        std::filesystem::remove(tmp, ignored);
-        fail("write_image", path, e.what());
-    }
-}
-
 } // namespace
 
 // IEC 61966-2-1: the linear-sRGB to XYZ matrix (the one Mitsuba 3 uses for its xyz pixel formats).
@@ -185,7 +173,7 @@ void write_image(const std::string& path, const Image& image) {
     if (image.width <= 0 || image.height <= 0 || image.pixels.size() != size_t(image.width) * image.height)
         fail("write_image", path, "image has invalid dimensions");
     if (ext == ".exr") {
-        write_atomically(path, [&](const std::string& tmp) { write_exr(tmp, image); });
+        write_file_atomically(path, [&](const std::string& tmp) { write_exr(tmp, image); });
         return;
     }
     std::vector<float> values(image.pixels.size() * 3);
@@ -200,8 +188,8 @@ void write_png(const std::string& path, int width, int height, int channels,
     if (width <= 0 || height <= 0 || channels < 1 || channels > 4 ||
         values.size() != size_t(width) * height * channels)
         fail("write_image", path, "image has invalid dimensions");
-    write_atomically(path,
-                     [&](const std::string& tmp) { write_png_data(tmp, width, height, channels, values); });
+    write_file_atomically(
+        path, [&](const std::string& tmp) { write_png_data(tmp, width, height, channels, values); });
 }
 
 } // namespace penumbra

@@ -10,6 +10,10 @@ namespace penumbra {
 ProgressBar::ProgressBar(bool enabled, std::string label)
     : enabled_(enabled && isatty(STDERR_FILENO)), label_(std::move(label)), start_(std::chrono::steady_clock::now()) {}
 
+ProgressBar::~ProgressBar() {
+    if (unfinished_) std::fprintf(stderr, "\n");
+}
+
 void ProgressBar::update(float fraction) {
     if (!enabled_) return;
     const auto now = std::chrono::steady_clock::now();
@@ -22,6 +26,7 @@ void ProgressBar::update(float fraction) {
     std::fprintf(stderr, "\r%s[%s] %5.1f%%  %.1fs", label_.empty() ? "" : (label_ + " ").c_str(), bar.c_str(),
                  100.0 * fraction, elapsed);
     if (fraction >= 1.f) std::fprintf(stderr, "\n");
+    unfinished_ = fraction < 1.f;
     std::fflush(stderr);
 }
 

@@ -1,5 +1,6 @@
 #include "diff/ad_suite.h"
 
+#include "core/atomic_file.h"
 #include "diff/budget.h"
 
 #include <nlohmann/json.hpp>
@@ -202,14 +203,9 @@ void write_cached_reference(const std::string& cache, const AdSuiteScene& scene,
     const std::string base = cache_base(cache, scene);
     write_image(base + "_fd.exr", fd.derivative);
     write_image(base + "_fd_stderr.exr", fd.stderr_img);
-    const std::string key_path = base + "_fd.json", tmp = key_path + ".tmp";
-    {
-        std::ofstream file(tmp);
-        file << nlohmann::json{{"key", reference_key(scene, res, h, spp, defines, seed)}, {"seconds", fd.seconds}}.dump(1)
-             << "\n";
-        if (!file) throw Error("cannot write '" + tmp + "'");
-    }
-    fs::rename(tmp, key_path);
+    const nlohmann::json key{{"key", reference_key(scene, res, h, spp, defines, seed)},
+                             {"seconds", fd.seconds}};
+    write_text_atomically(base + "_fd.json", key.dump(1) + "\n");
 }
 
 } // namespace penumbra

@@ -74,7 +74,6 @@ PassResult run_pass(const Scene& scene, const Parameters& params, const PathSamp
                             {}};
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
-                check_interrupt(); // per pixel: Ctrl-C stops long renders promptly (core/interrupt.h)
                 const uint64_t pixel = uint64_t(y) * width + x;
                 const int n = budget.count(seed, pixel);
                 if (n == 0) continue;
@@ -82,6 +81,7 @@ PassResult run_pass(const Scene& scene, const Parameters& params, const PathSamp
                 const Vec3d a = adjoint ? Vec3d(adjoint->at(x, y)) : Vec3d(1.0);
                 Vec3d primal(0.0), derivative(0.0);
                 for (int m = 0; m < n; ++m) {
+                    check_interrupt(); // per sample: at a large spp, a pixel takes seconds
                     sampler.start(seed, pixel, uint64_t(m));
                     const auto [ray, ray_weight] = camera_sample(sensor, sampler, x, y);
                     const Vec3d L = sample_path(scene, sampler, ray, settings, Vec3d(0.0), Vec3d(0.0), none, rays);

@@ -46,10 +46,10 @@ void for_each_sample(const PixelLoop& loop, uint64_t seed, const std::function<v
             auto pixels = make(*tile);
             for (int y = y0; y < y1; ++y)
                 for (int x = x0; x < x1; ++x) {
-                    check_interrupt(); // per pixel: Ctrl-C stops long renders promptly (core/interrupt.h)
                     const uint64_t pixel = uint64_t(y) * film.width + x;
                     pixels.begin(x, y);
                     for (int m = 0; m < loop.options.spp; ++m) {
+                        check_interrupt(); // per sample: at a large spp, a pixel takes seconds
                         sampler.start(seed, pixel, uint64_t(loop.antithetic ? m / 2 : m));
                         tape.clear();
                         const Color3<Var> v = tile->sample(sampler, {x, y, pixel, m, seed}, rays);

@@ -1,11 +1,12 @@
 #include "diff/primary_boundary.h"
 
 #include "core/distribution.h"
+#include "core/interrupt.h"
 #include "diff/material_form.h"
 #include "diff/media_radiance.h"
 #include "diff/media_walk.h"
-#include "render/volume_visibility.h"
 #include "diff/shading_terminator.h"
+#include "render/volume_visibility.h"
 #include "scene/texture.h"
 
 #include <algorithm>
@@ -525,6 +526,7 @@ void guide(const Scene& scene, Silhouettes& sil, const BoundaryOptions& options)
     tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency());
     arena.execute([&] {
         tbb::parallel_for(size_t(0), n, [&](size_t e) {
+            check_interrupt();
             Sampler sampler;
             RayCounter rays;
             double sum2 = 0;

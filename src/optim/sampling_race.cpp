@@ -1,5 +1,6 @@
 #include "optim/sampling_race.h"
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/plot.h"
 #include "core/rng.h"
@@ -11,7 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
+#include <sstream>
 
 namespace penumbra {
 
@@ -29,7 +30,7 @@ double parameter_error(const std::vector<float>& x, const std::vector<float>& tr
 }
 
 void write_csv(const std::string& path, const SamplingRaceResult& result) {
-    std::ofstream out(path);
+    std::ostringstream out;
     out << "method,spp,iteration,seconds,loss,parameter_error";
     for (const std::string& p : result.parameters) out << "," << p;
     out << "\n";
@@ -39,7 +40,7 @@ void write_csv(const std::string& path, const SamplingRaceResult& result) {
             for (float v : r.values) out << "," << v;
             out << "\n";
         }
-    if (!out) throw Error("cannot write '" + path + "'");
+    write_text_atomically(path, out.str());
 }
 
 // Loss (top) and parameter error (bottom) against estimator time, both methods on each chart, one PNG.

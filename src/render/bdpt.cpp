@@ -93,10 +93,10 @@ std::vector<Layer> BidirectionalPathTracer::render(const Scene& scene, const Ren
             uint64_t local_dropped = 0;
             const uint64_t begin = n_pixels * c / n_chunks, end = n_pixels * (c + 1) / n_chunks;
             for (uint64_t pixel = begin; pixel < end; ++pixel) {
-                check_interrupt();
                 const int x = int(pixel % width), y = int(pixel / width);
                 Color3f sum(0.f);
                 for (int s = 0; s < spp; ++s) {
+                    check_interrupt(); // per sample: at a large spp, a pixel takes seconds
                     sampler.start(options.seed, pixel, uint64_t(s));
                     const Vec2f u = sampler.next_2d();
                     const Vec2f pos = film.sample_position(

@@ -33,10 +33,10 @@ std::vector<Layer> SamplingIntegrator::render(const Scene& scene, const RenderOp
         uint64_t local_dropped = 0;
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
-                check_interrupt(); // per pixel: Ctrl-C stops long renders promptly (core/interrupt.h)
                 const uint64_t pixel = uint64_t(y) * width + x;
                 std::fill(sum.begin(), sum.end(), Color3f(0.f));
                 for (int s = 0; s < spp; ++s) {
+                    check_interrupt(); // per sample: at a large spp, a pixel takes seconds
                     sampler.start(options.seed, pixel, uint64_t(s));
                     // Filter importance sampling: the pixel estimate is ∫ f(x - x_j) L(x) dx with f normalized.
                     const Vec2f u = sampler.next_2d();
