@@ -211,6 +211,7 @@ void cmd_gradient(const Common& c) {
     out["method"] = c.method + ": " + g.description;
     for (const std::string& w : g.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     out["warnings"] = g.warnings;
+    out["dropped_samples"] = g.dropped_samples;
     out["seconds"] = g.seconds;
     out["spp"] = c.spp;
     for (const auto& [p, index] : params.enabled()) {

@@ -231,15 +231,20 @@ PYBIND11_MODULE(_penumbra, m) {
             [](PyScene& s, int spp, uint64_t seed, int threads, int sensor, bool progress) {
                 std::lock_guard<std::mutex> lock(s.mutex);
                 ProgressBar bar(progress, "render");
-                return to_array(run_interruptible<Image>([&] {
+                RenderStats stats;
+                Image image = run_interruptible<Image>([&] {
                     SensorScope scope(*s.scene, sensor);
                     RenderOptions o;
                     o.spp = spp;
                     o.seed = seed;
                     o.threads = threads;
                     o.progress = bar.callback();
-                    return render(*s.scene, o);
-                }));
+                    return render(*s.scene, o, &stats);
+                });
+                if (stats.dropped_samples > 0)
+                    warn({std::to_string(stats.dropped_samples) +
+                          " sample(s) with a non-finite value were left out of the image"});
+                return to_array(std::move(image));
             },
             py::arg("spp"), py::arg("seed"), py::arg("threads"), py::arg("sensor"), py::arg("progress"))
         .def("gradient",

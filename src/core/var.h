@@ -60,8 +60,9 @@ public:
         }
     }
     // Reverse mode: propagates the adjoints `seeds` (node, adjoint) back to the leaves and adds them to
-    // gradient[param].
-    void backward(const std::vector<std::pair<int32_t, float>>& seeds, double* gradient, std::vector<float>& adjoint) const {
+    // gradient[param]; adds nothing and returns false when a leaf's adjoint is not finite (the NaN policy: the
+    // sample is dropped and counted by the caller).
+    bool backward(const std::vector<std::pair<int32_t, float>>& seeds, double* gradient, std::vector<float>& adjoint) const {
         adjoint.assign(nodes_.size(), 0.f);
         for (const auto& [node, a] : seeds)
             if (node >= 0) adjoint[node] += a;
@@ -72,7 +73,10 @@ public:
             if (n.a >= 0) adjoint[n.a] += a * n.da;
             if (n.b >= 0) adjoint[n.b] += a * n.db;
         }
+        for (const Leaf& l : leaves_)
+            if (!std::isfinite(adjoint[l.node])) return false;
         for (const Leaf& l : leaves_) gradient[l.param] += adjoint[l.node];
+        return true;
     }
     const std::vector<Node>& nodes() const { return nodes_; }
     const std::vector<Leaf>& leaves() const { return leaves_; }

@@ -15,6 +15,7 @@
 #include "render/path_tracer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <utility>
 
@@ -124,11 +125,16 @@ Image boundary_derivative(const Scene& scene, const Parameters& params, const Bo
         costs[c] += SampleCost{1, rays.rays, tape.size()};
         if (b.usable()) {
             tape.forward(direction.data(), tangent);
-            for (int k = 0; k < b.n_splats; ++k) {
+            bool finite = true;
+            for (int k = 0; k < b.n_splats; ++k) finite = finite && std::isfinite(tangent[b.splats[k].velocity.id]);
+            for (int k = 0; k < b.n_splats && finite; ++k) {
                 const BoundarySample::Splat& splat = b.splats[k];
                 const Color3f value = splat.weight * float(double(tangent[splat.velocity.id]) / n);
                 for_each_pixel_in_footprint(film, splat.s, [&](int x, int y, float w) { chunks[c].at(x, y) += value * w; });
             }
+            costs[c].dropped += !finite;
+        } else {
+            costs[c].dropped += b.n_splats > 0; // a non-finite weight
         }
         tape.clear();
     });
@@ -167,7 +173,9 @@ void boundary_gradient(const Scene& scene, const Parameters& params, const Image
                 for_each_pixel_in_footprint(film, splat.s, [&](int x, int y, float w) { seed += w * dot(adjoint.at(x, y), splat.weight); });
                 seeds.emplace_back(splat.velocity.id, float(seed / n));
             }
-            tape.backward(seeds, local.local().data(), scratch);
+            costs[c].dropped += !tape.backward(seeds, local.local().data(), scratch);
+        } else {
+            costs[c].dropped += b.n_splats > 0; // a non-finite weight
         }
         tape.clear();
     });

@@ -1,5 +1,7 @@
 #include "diff/dpm.h"
 
+#include <atomic>
+
 #include "core/batch_stats.h"
 #include "core/interrupt.h"
 #include "core/seconds.h"
@@ -164,7 +166,8 @@ struct ReverseSweep {
     std::vector<double> gradient;
     std::vector<float> scratch;
     std::vector<std::pair<int32_t, float>> seeds;
-    void run() { Tape::current().backward(seeds, gradient.data(), scratch); }
+    uint64_t dropped = 0; // paths whose adjoint sweep was not finite (the NaN policy)
+    void run() { dropped += !Tape::current().backward(seeds, gradient.data(), scratch); }
 };
 
 // Σ of the threads' gradients (tape_dimension() values), chained to the parameters.
@@ -176,6 +179,12 @@ std::vector<double> total(const Parameters& params, const tbb::enumerable_thread
     return sum;
 }
 
+uint64_t dropped(const tbb::enumerable_thread_specific<ReverseSweep>& sweeps) {
+    uint64_t n = 0;
+    for (const ReverseSweep& s : sweeps) n += s.dropped;
+    return n;
+}
+
 } // namespace
 
 DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const DpmOptions& o) {
@@ -184,6 +193,7 @@ DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const
     const Film& film = *scene.sensor->film;
     const bool screen = o.variant == DpmVariant::G;
     ImageBatches primal_batches, derivative_batches, x_batches, y_batches;
+    std::atomic<uint64_t> dropped{0};
     for (int b = 0; b < o.batches; ++b) {
         Image primal(film.width, film.height), derivative(film.width, film.height);
         Image motion_x(film.width, film.height), motion_y(film.width, film.height);
@@ -205,7 +215,10 @@ DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const
                                 tangent_of(s.value.z, tangent));
                 const Color3f value(s.value.x.v, s.value.y.v, s.value.z.v);
                 const Color3f dx = value * tangent_of(s.film.x, tangent), dy = value * tangent_of(s.film.y, tangent);
-                if (!is_finite(d) || !is_finite(dx) || !is_finite(dy)) return;
+                if (!is_finite(d) || !is_finite(dx) || !is_finite(dy)) {
+                    ++dropped;
+                    return;
+                }
                 derivative.pixels[s.pixel] += d * inv;
                 motion_x.pixels[s.pixel] += dx * inv;
                 motion_y.pixels[s.pixel] += dy * inv;
@@ -228,6 +241,7 @@ DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const
         out.screen_y_stderr = y_batches.standard_error();
     }
     out.mean_stderr = derivative_batches.mean_standard_error();
+    out.image.cost.dropped = dropped.load();
     out.warnings = settings_warnings(scene);
     out.image.seconds = seconds_since(start);
     return out;
@@ -252,6 +266,7 @@ Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image&
             sweep.run();
         });
     out.values = total(params, sweeps);
+    out.cost.dropped = dropped(sweeps);
     out.warnings = settings_warnings(scene);
     out.seconds = seconds_since(start);
     return out;
@@ -301,6 +316,7 @@ DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, 
     DpmMatching out;
     out.loss = loss.value;
     out.gradient = Gradient{total(params, sweeps), settings_warnings(scene), primal, 0.0, {}};
+    out.gradient.cost.dropped = dropped(sweeps);
     out.gradient.seconds = seconds_since(start);
     return out;
 }

@@ -28,7 +28,7 @@ class DpmMethod final : public DerivativeMethod {
         const DpmDerivative d = dpm_derivative(scene, params, options(run, run.batches));
         MethodDerivative out = one_term_derivative(
             d.image, base_.variant == DpmVariant::C ? "photon-mapping" : "contribution", name_);
-        out.warnings = d.warnings;
+        out.warnings.insert(out.warnings.begin(), d.warnings.begin(), d.warnings.end());
         if (base_.variant == DpmVariant::G) {
             out.terms.push_back({"screen_x", d.screen_x, d.screen_x_stderr});
             out.terms.push_back({"screen_y", d.screen_y, d.screen_y_stderr});

@@ -70,6 +70,7 @@ struct MethodDerivative {
     std::string description; // one line for the log ("interior + boundary terms, image-space first vertex")
     double seconds = 0;
     std::vector<std::string> warnings; // what the estimate leaves out, for the user
+    uint64_t dropped_samples = 0;      // non-finite samples left out (the NaN policy; also in `warnings`)
 };
 
 struct MethodGradient {
@@ -79,7 +80,18 @@ struct MethodGradient {
     std::vector<std::string> warnings; // what the estimate leaves out, for the user
     double loss = std::numeric_limits<double>::quiet_NaN(); // loss_gradient: the loss of its primal image
     double seconds = 0;
+    uint64_t dropped_samples = 0; // non-finite samples left out (the NaN policy; also in `warnings`)
 };
+
+// The NaN policy, one rule for every method: a sample whose value or derivative is not finite is left out of
+// the estimate and counted; a non-zero count is reported with the result (dropped_samples, and a warning that
+// every front shows: the CLI's stderr and JSON, Python's UserWarning, optimize's log).
+template <typename Result> void report_dropped_samples(Result& result, uint64_t dropped) {
+    result.dropped_samples = dropped;
+    if (dropped > 0)
+        result.warnings.push_back(std::to_string(dropped) +
+                                  " sample(s) with a non-finite value or derivative were left out of the estimate");
+}
 
 class DerivativeMethod {
   public:

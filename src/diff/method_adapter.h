@@ -30,6 +30,7 @@ inline MethodDerivative one_term_derivative(const DerivativeImage& d, const std:
     out.terms.push_back({term, d.derivative, d.stderr_img});
     out.description = description;
     out.seconds = d.seconds;
+    report_dropped_samples(out, d.cost.dropped);
     return out;
 }
 
@@ -43,6 +44,8 @@ MethodGradient method_gradient(const EstimatedGradient& g, const std::string& de
     if constexpr (requires { g.warnings; }) out.warnings = g.warnings;
     out.description = description;
     out.seconds = g.seconds;
+    if constexpr (requires { g.cost.dropped; }) report_dropped_samples(out, g.cost.dropped);
+    if constexpr (requires { g.dropped; }) report_dropped_samples(out, g.dropped);
     return out;
 }
 

@@ -6,6 +6,7 @@
 #include "diff/adaptive_pixels.h"
 #include "render/tiles.h"
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 
@@ -32,17 +33,19 @@ struct ReverseSink {
     double* gradient;
     std::vector<float> scratch;
     std::vector<std::pair<int32_t, float>> seeds = std::vector<std::pair<int32_t, float>>(3);
+    uint64_t dropped = 0; // local values whose adjoint sweep was not finite
     void operator()(const Color3<Var>& value, const Vec3d& weight) {
         seeds[0] = {value.x.id, float(weight.x)};
         seeds[1] = {value.y.id, float(weight.y)};
         seeds[2] = {value.z.id, float(weight.z)};
-        Tape::current().backward(seeds, gradient, scratch);
+        dropped += !Tape::current().backward(seeds, gradient, scratch);
     }
 };
 
 struct PassResult {
     Image primal, derivative;
     std::vector<double> gradient;
+    uint64_t dropped = 0; // the NaN policy's count
 };
 
 bool finite(const Vec3d& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
@@ -65,9 +68,11 @@ PassResult run_pass(const Scene& scene, const Parameters& params, const PathSamp
     // Per-tile gradients summed in tile order: the same result for any thread count.
     std::vector<std::vector<double>> tile_gradients(mode == Mode::Reverse ? size_t(tiles_x * tiles_y) : 0,
                                                     std::vector<double>(size_t(params.dimension()), 0.0));
+    std::atomic<uint64_t> out_dropped{0};
     for_each_tile(width, height, threads, [&](int x0, int y0, int x1, int y1) {
         Sampler sampler;
         RayCounter rays;
+        uint64_t dropped = 0;
         NoSink none;
         ForwardSink forward{params.direction().data(), {}, Vec3d(0.0)};
         ReverseSink reverse{mode == Mode::Reverse ? tile_gradients[size_t((y0 / tile) * tiles_x + x0 / tile)].data() : nullptr,
@@ -85,7 +90,10 @@ PassResult run_pass(const Scene& scene, const Parameters& params, const PathSamp
                     sampler.start(seed, pixel, uint64_t(m));
                     const auto [ray, ray_weight] = camera_sample(sensor, sampler, x, y);
                     const Vec3d L = sample_path(scene, sampler, ray, settings, Vec3d(0.0), Vec3d(0.0), none, rays);
-                    if (!finite(L)) continue;
+                    if (!finite(L)) {
+                        ++dropped;
+                        continue;
+                    }
                     const Vec3d camera(ray_weight);
                     primal += L * camera;
                     if (mode == Mode::Primal) continue;
@@ -96,6 +104,7 @@ PassResult run_pass(const Scene& scene, const Parameters& params, const PathSamp
                         forward.derivative = Vec3d(0.0);
                         sample_path(scene, sampler, replayed.first, settings, L, camera, forward, rays);
                         if (finite(forward.derivative)) derivative += forward.derivative;
+                        else ++dropped;
                     } else {
                         sample_path(scene, sampler, replayed.first, settings, L, a * camera / c, reverse, rays);
                     }
@@ -104,7 +113,9 @@ PassResult run_pass(const Scene& scene, const Parameters& params, const PathSamp
                 out.derivative.at(x, y) = Color3f(derivative / c);
             }
         Tape::current().clear();
+        out_dropped += dropped + reverse.dropped;
     }, progress);
+    out.dropped = out_dropped.load();
     for (const std::vector<double>& g : tile_gradients)
         for (size_t k = 0; k < g.size(); ++k) out.gradient[k] += g[k];
     return out;
@@ -162,13 +173,15 @@ DerivativeImage path_sampling_derivative(const Scene& scene, const Parameters& p
     const auto start = std::chrono::steady_clock::now();
     const PixelBudget budget = o.adaptive ? adaptive_budget(adjoint, o.spp, o.defensive) : uniform_budget(film.width, film.height, o.spp);
     ImageBatches primal, derivative;
+    SampleCost cost;
     for (int b = 0; b < o.batches; ++b) {
         const PassResult r = run_pass(scene, params, settings_of(o), budget, batch_seed(o.seed, b), o.threads, Mode::Forward,
                                       nullptr, batch_progress(o, b));
         primal.add(r.primal);
         derivative.add(r.derivative);
+        cost.dropped += r.dropped;
     }
-    return {primal.mean(), derivative.mean(), derivative.standard_error(), seconds_since(start), {}};
+    return {primal.mean(), derivative.mean(), derivative.standard_error(), seconds_since(start), cost};
 }
 
 SampledGradient path_sampling_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
@@ -180,13 +193,14 @@ SampledGradient path_sampling_gradient(const Scene& scene, const Parameters& par
     const PixelBudget budget = o.adaptive ? adaptive_budget(adjoint, o.spp, o.defensive) : uniform_budget(film.width, film.height, o.spp);
     std::vector<std::vector<double>> gradients;
     ImageBatches primal;
+    SampledGradient g;
     for (int b = 0; b < o.batches; ++b) {
         PassResult r = run_pass(scene, params, settings_of(o), budget, batch_seed(o.seed, b), o.threads, Mode::Reverse,
                                 &adjoint, batch_progress(o, b));
         gradients.push_back(std::move(r.gradient));
         primal.add(r.primal);
+        g.dropped += r.dropped;
     }
-    SampledGradient g;
     batch_statistics(gradients, g.values, g.standard_error);
     g.batch_values = std::move(gradients);
     g.primal = primal.mean();

@@ -50,6 +50,7 @@ struct SampledGradient {
     std::vector<std::vector<double>> batch_values; // each batch's estimate (for statistics of combinations)
     Image primal;                        // pass 2's image (with adaptive pixels: the same 1 / c_j weighting)
     double seconds = 0;
+    uint64_t dropped = 0;                // paths with a non-finite value or derivative, left out (NaN policy)
 };
 
 struct LossGradient {

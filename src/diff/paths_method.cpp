@@ -26,7 +26,9 @@ class PathsMethod final : public DerivativeMethod {
         const DerivativeImage d =
             path_sampling_derivative(scene, params, run_options(base_, scene, run, run.batches),
                                      run.importance ? *run.importance : Image());
-        return {d.derivative, d.stderr_img, {}, "path sampling: " + name_, d.seconds, {}};
+        MethodDerivative out{d.derivative, d.stderr_img, {}, "path sampling: " + name_, d.seconds, {}};
+        report_dropped_samples(out, d.cost.dropped);
+        return out;
     }
 
     MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,

@@ -29,7 +29,8 @@ class StatelessTile final : public TileSamples {
 
 // Every camera sample of the film, tiles in parallel: `make(tile)` gives a tile's pixel accumulator, whose
 // begin(x, y) and end(x, y) run around each pixel and add(value) on each finite sample (its tape still
-// recorded).
+// recorded), which returns false when the sample's derivative is not finite. Samples with a non-finite value
+// or derivative are dropped and counted (SampleCost::dropped).
 template <typename MakePixels>
 void for_each_sample(const PixelLoop& loop, uint64_t seed, const std::function<void(float)>& progress,
                      SharedSampleCost& cost, MakePixels&& make) {
@@ -40,7 +41,7 @@ void for_each_sample(const PixelLoop& loop, uint64_t seed, const std::function<v
         [&](int x0, int y0, int x1, int y1) {
             Sampler sampler(*loop.scene.sensor->sampler, streams);
             RayCounter rays;
-            uint64_t tape_nodes = 0;
+            uint64_t tape_nodes = 0, dropped = 0;
             Tape& tape = Tape::current();
             const std::unique_ptr<TileSamples> tile = loop.tiles();
             auto pixels = make(*tile);
@@ -54,12 +55,13 @@ void for_each_sample(const PixelLoop& loop, uint64_t seed, const std::function<v
                         tape.clear();
                         const Color3<Var> v = tile->sample(sampler, {x, y, pixel, m, seed}, rays);
                         tape_nodes += tape.size();
-                        if (finite(v)) pixels.add(v);
+                        if (!finite(v) || !pixels.add(v)) ++dropped;
                     }
                     pixels.end(x, y);
                 }
             tape.clear();
-            cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(loop.options.spp), rays.rays, tape_nodes});
+            cost.add({uint64_t(x1 - x0) * uint64_t(y1 - y0) * uint64_t(loop.options.spp), rays.rays, tape_nodes,
+                      dropped});
         },
         progress);
 }
@@ -83,12 +85,14 @@ struct ForwardPixels {
         primal = derivative = Vec3d(0.0);
         tile.begin_pixel(x, y);
     }
-    void add(const Color3<Var>& v) {
+    bool add(const Color3<Var>& v) {
         Tape::current().forward(direction.data(), tangent);
         Vec3d d(tangent_of(v.x, tangent), tangent_of(v.y, tangent), tangent_of(v.z, tangent));
         tile.correct(tangent, d);
+        if (!is_finite(Vec3f(d))) return false;
         primal += Vec3d(v.x.v, v.y.v, v.z.v);
-        if (is_finite(Vec3f(d))) derivative += d;
+        derivative += d;
+        return true;
     }
     void end(int x, int y) {
         out.primal.at(x, y) = Color3f(primal / double(loop.options.spp));
@@ -114,12 +118,13 @@ struct ReversePixels {
         a = adjoint.at(x, y) * (1.f / float(loop.options.spp));
         primal = Vec3d(0.0);
     }
-    void add(const Color3<Var>& v) {
-        primal += Vec3d(v.x.v, v.y.v, v.z.v);
+    bool add(const Color3<Var>& v) {
         seeds[0] = {v.x.id, a.x};
         seeds[1] = {v.y.id, a.y};
         seeds[2] = {v.z.id, a.z};
-        Tape::current().backward(seeds, gradient.data(), scratch);
+        if (!Tape::current().backward(seeds, gradient.data(), scratch)) return false;
+        primal += Vec3d(v.x.v, v.y.v, v.z.v);
+        return true;
     }
     void end(int x, int y) { primal_out.at(x, y) = Color3f(primal / double(loop.options.spp)); }
 };
@@ -164,7 +169,7 @@ DerivativeImage pixel_derivative(const PixelLoop& loop) {
             SampleCost edge_cost;
             const Image edges =
                 loop.film_edge(seed).derivative(loop.params, film_edge_options(loop, seed, edge_cost));
-            cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
+            cost.add({0, edge_cost.rays, edge_cost.tape_nodes, edge_cost.dropped});
             for (size_t i = 0; i < edges.pixels.size(); ++i)
                 s.derivative.pixels[i] += edges.pixels[i];
         }
@@ -200,7 +205,7 @@ Gradient pixel_gradient(const PixelLoop& loop, const Image& adjoint) {
         SampleCost edge_cost;
         loop.film_edge(loop.options.seed).gradient(loop.params, adjoint,
                                            film_edge_options(loop, loop.options.seed, edge_cost), result.values);
-        cost.add({0, edge_cost.rays, edge_cost.tape_nodes});
+        cost.add({0, edge_cost.rays, edge_cost.tape_nodes, edge_cost.dropped});
     }
     result.cost = cost.get();
     std::vector<double> sum(dim, 0.0);

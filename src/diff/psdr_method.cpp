@@ -66,6 +66,9 @@ class PsdrMethod final : public DerivativeMethod {
         if (boundary_ && run.verbose) print_costs(d);
         out.description = describe(scene, params, o);
         out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        uint64_t dropped = 0;
+        for (const SampleCost& c : d.cost) dropped += c.dropped;
+        report_dropped_samples(out, dropped);
         return out;
     }
 

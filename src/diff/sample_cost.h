@@ -10,6 +10,9 @@ struct SampleCost {
     uint64_t samples = 0;
     uint64_t rays = 0;        // rays cast (intersection and shadow)
     uint64_t tape_nodes = 0;  // AD tape nodes recorded (each also swept once)
+    // The NaN policy: samples whose value or derivative was not finite, left out of the estimate (and counted
+    // in `samples`).
+    uint64_t dropped = 0;
 
     // Cost in units of one ray: rays, plus AD tape nodes (each recorded, then swept forward or backward), plus
     // what a sample does besides (sampling edges, lights and lobes, shading). Fitted to per-term timings of
@@ -20,16 +23,18 @@ struct SampleCost {
     double units() const { return double(rays) + double(tape_nodes) / TapeNodesPerRay + double(samples) * RaysPerSample; }
 
     SampleCost& operator+=(const SampleCost& o) {
-        samples += o.samples, rays += o.rays, tape_nodes += o.tape_nodes;
+        samples += o.samples, rays += o.rays, tape_nodes += o.tape_nodes, dropped += o.dropped;
         return *this;
     }
 };
 
 // Integer counts summed from worker threads (the total does not depend on the order).
 struct SharedSampleCost {
-    std::atomic<uint64_t> samples{0}, rays{0}, tape_nodes{0};
-    void add(const SampleCost& c) { samples += c.samples, rays += c.rays, tape_nodes += c.tape_nodes; }
-    SampleCost get() const { return {samples.load(), rays.load(), tape_nodes.load()}; }
+    std::atomic<uint64_t> samples{0}, rays{0}, tape_nodes{0}, dropped{0};
+    void add(const SampleCost& c) {
+        samples += c.samples, rays += c.rays, tape_nodes += c.tape_nodes, dropped += c.dropped;
+    }
+    SampleCost get() const { return {samples.load(), rays.load(), tape_nodes.load(), dropped.load()}; }
 };
 
 } // namespace penumbra

@@ -317,7 +317,8 @@ std::string snapshot_name(int iteration) {
     return buf;
 }
 
-// CSV columns: iteration, loss, parameter_error, translation_error, rotation_error, seconds, then every
+// CSV columns: iteration, loss, parameter_error, translation_error, rotation_error, seconds, dropped_samples
+// (the gradient's samples left out for a non-finite value or derivative: the NaN policy), then every
 // optimized scalar (rotations as rotation vectors in degrees). The whole file is rewritten atomically after
 // each iteration (core/atomic_file.h), so that a reader, or an interrupted run, sees whole lines only.
 // Measured on an ext4 disk: 0.24 ms per rewrite after 1000 iterations of 8 columns, 0.8 ms with 64 columns (6
@@ -327,7 +328,7 @@ class CsvLog {
   public:
     CsvLog(const fs::path& path, const InverseProblem& problem) : path_(path.string()) {
         std::ostringstream out;
-        out << "iteration,loss,parameter_error,translation_error,rotation_error,seconds";
+        out << "iteration,loss,parameter_error,translation_error,rotation_error,seconds,dropped_samples";
         for (const InverseProblem::Entry& e : problem.entries())
             for (int k = 0; k < e.size && listed(e); ++k) {
                 // A deformation handle's name holds its center (blob.deform@0.3,0.9,0): quoted (RFC 4180).
@@ -347,7 +348,7 @@ class CsvLog {
             out << ",";
             if (std::isfinite(error)) out << std::to_string(error);
         }
-        std::snprintf(buf, sizeof(buf), ",%.3f", r.seconds);
+        std::snprintf(buf, sizeof(buf), ",%.3f,%llu", r.seconds, (unsigned long long)r.dropped_samples);
         out << buf;
         for (const InverseProblem::Entry& e : problem.entries())
             for (int k = e.offset; k < e.offset + e.size && listed(e); ++k) {
@@ -577,6 +578,7 @@ OptimizeResult run_optimization(const OptimizeConfig& config,
         const std::vector<size_t> subset =
             views_of_iteration(views.size(), config.views_per_iteration, config.seed, it);
         double loss_sum = 0;
+        uint64_t dropped = 0;
         std::vector<double> gradient(size_t(problem.dimension()), 0.0);
         for (size_t v : subset) {
             views.select(v);
@@ -589,6 +591,7 @@ OptimizeResult run_optimization(const OptimizeConfig& config,
                 MethodGradient mg;
                 g = problem.loss_gradient(targets[v], config.loss, *method, run, mg, description);
                 loss_sum += mg.loss;
+                dropped += mg.dropped_samples;
                 primal = mg.primal;
             } else {
                 primal = render_image(*scene, config.spp, view_stream(config.seed, 2 * uint64_t(it) + 1, v),
@@ -596,7 +599,9 @@ OptimizeResult run_optimization(const OptimizeConfig& config,
                 const LossResult loss = compute_loss(config.loss, primal, targets[v]);
                 loss_sum += loss.value;
                 run.seed = view_stream(config.seed, 2 * uint64_t(it) + 2, v);
-                g = problem.gradient(loss.adjoint, *method, run, description);
+                uint64_t view_dropped = 0;
+                g = problem.gradient(loss.adjoint, *method, run, description, &view_dropped);
+                dropped += view_dropped;
             }
             if (config.snapshot_every > 0 && it % config.snapshot_every == 0 && primal.width > 0) {
                 write_image((out / view_file(snapshot_name(it), ".png", config, views, v)).string(), primal);
@@ -611,6 +616,7 @@ OptimizeResult run_optimization(const OptimizeConfig& config,
                             std::to_string(bad - g.begin()) + ")");
         }
         IterationRecord record = record_at(it, loss_sum / double(subset.size()));
+        record.dropped_samples = dropped;
         // Exponential schedule: the rates fall to lr_decay × lr at the last iteration.
         const double lr_scale =
             config.iterations > 1 ? std::pow(config.lr_decay, double(it) / (config.iterations - 1)) : 1.0;

@@ -107,6 +107,7 @@ struct IterationRecord {
     double translation_error = std::numeric_limits<double>::quiet_NaN();
     double rotation_error = std::numeric_limits<double>::quiet_NaN();
     double seconds = 0; // since the loop started
+    uint64_t dropped_samples = 0; // gradient samples left out for a non-finite value (the NaN policy)
 };
 
 struct ParameterResult {

@@ -267,8 +267,11 @@ void InverseProblem::apply() {
 }
 
 std::vector<double> InverseProblem::gradient(const Image& adjoint, DerivativeMethod& method,
-                                             const MethodRun& run, std::string* description) const {
-    return to_tangent(method.gradient(scene_, *params_, adjoint, run), description);
+                                             const MethodRun& run, std::string* description,
+                                             uint64_t* dropped) const {
+    const MethodGradient g = method.gradient(scene_, *params_, adjoint, run);
+    if (dropped) *dropped = g.dropped_samples;
+    return to_tangent(g, description);
 }
 
 std::vector<double> InverseProblem::loss_gradient(const Image& target, LossKind loss, DerivativeMethod& method,

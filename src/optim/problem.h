@@ -88,9 +88,10 @@ class InverseProblem {
 
     // dL/dx in the tangent layout for the adjoint ∂L/∂I at the current values, by a derivative method
     // (diff/method.h: psdr includes the boundary terms a pose needs, interior does not).
-    // `description`, when given, receives the method's description of the run.
+    // `description`, when given, receives the method's description of the run, `dropped` the samples it left
+    // out for a non-finite value or derivative (the NaN policy, diff/method.h).
     std::vector<double> gradient(const Image& adjoint, DerivativeMethod& method, const MethodRun& run,
-                                 std::string* description = nullptr) const;
+                                 std::string* description = nullptr, uint64_t* dropped = nullptr) const;
     // The same for a loss the method evaluates itself against the target (the matching loss of dpm-g); `g`
     // receives the method's result (its loss and primal image).
     std::vector<double> loss_gradient(const Image& target, LossKind loss, DerivativeMethod& method,
