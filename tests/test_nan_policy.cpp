@@ -2,9 +2,7 @@
 // left out of the estimate, counted and reported, so that one bad sample never poisons an image or a gradient;
 // and inputs that invite NaNs (degenerate and duplicate triangles, roughness 0 and 1e-8, a camera grazing a
 // plane) render and differentiate with finite outputs.
-#include "diff/method.h"
-#include "render/render.h"
-#include "scene/scene.h"
+#include "robustness_test_util.h"
 #include "xml_test_util.h"
 
 #include <gtest/gtest.h>
@@ -17,56 +15,6 @@ using namespace penumbra;
 using namespace penumbra::test;
 
 namespace {
-
-// A box on a floor under an area light, 16x16; `box_bsdf` and `floor_bsdf` are BSDF elements, `sensor` the
-// sensor's to_world.
-std::string scene_xml(const std::string& box_bsdf, const std::string& floor_bsdf = R"(<bsdf type="diffuse"/>)",
-                      const std::string& box_shape = R"(<shape type="cube" id="box">)",
-                      const std::string& sensor = R"(<lookat origin="0,2,4" target="0,0.3,0" up="0,1,0"/>)") {
-    return R"(<scene version="3.0.0">
-      <integrator type="path"><integer name="max_depth" value="4"/></integrator>
-      <sensor type="perspective"><float name="fov" value="40"/>
-        <transform name="to_world">)" + sensor + R"(</transform>
-        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film></sensor>
-      )" + box_shape + R"(<transform name="to_world"><scale value="0.4"/><translate value="0,0.4,0"/></transform>
-        )" + box_bsdf + R"(</shape>
-      <shape type="rectangle" id="floor"><transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform>
-        )" + floor_bsdf + R"(</shape>
-      <shape type="rectangle" id="light"><transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/>
-        <translate value="0,2.5,0"/></transform><emitter type="area"><rgb name="radiance" value="8"/></emitter></shape>
-    </scene>)";
-}
-
-bool finite(const Image& image) {
-    for (const Color3f& c : image.pixels)
-        if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z)) return false;
-    return true;
-}
-
-struct Outputs {
-    RenderStats render;
-    MethodDerivative derivative;
-    MethodGradient gradient;
-};
-
-// Render, and psdr's derivative and gradient of `param`; every output must be finite.
-Outputs render_and_differentiate(Scene& scene, const std::string& param, const std::string& method = "psdr") {
-    Outputs out;
-    RenderOptions ro;
-    ro.spp = 4;
-    const Image image = render(scene, ro, &out.render);
-    EXPECT_TRUE(finite(image)) << "render";
-    Parameters params(scene);
-    params.enable({parse_param_selection(param)});
-    MethodRun run;
-    run.spp = 8;
-    out.derivative = make_method(method, MethodOptions())->derivative(scene, params, run);
-    EXPECT_TRUE(finite(out.derivative.derivative)) << method << " derivative of " << param;
-    out.gradient = make_method(method, MethodOptions())
-                       ->gradient(scene, params, Image(16, 16, Color3f(1.f)), run);
-    for (double g : out.gradient.values) EXPECT_TRUE(std::isfinite(g)) << method << " gradient of " << param;
-    return out;
-}
 
 bool warns_of_dropped_samples(const std::vector<std::string>& warnings) {
     for (const std::string& w : warnings)
