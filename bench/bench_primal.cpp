@@ -6,6 +6,7 @@
 //  - primal throughput of `path` and raw Embree incoherent-ray throughput on the same geometry (their ratio);
 //  - the reverse-mode gradient pass (interior term, every data parameter enabled: 300k+ scalars, most of them
 //    vertex positions) against the primal pass at the same samples per pixel (their time ratio per sample);
+//  - the peak resident memory of each pass (Linux VmHWM, reset before it);
 //  - the cost model of the sample budgets (diff/sample_cost.h): seconds per counted cost unit of each pass,
 //    relative to the forward-mode interior's (1 everywhere if the model were exact).
 #include "core/atomic_file.h"
@@ -28,6 +29,8 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <string>
 #include <sstream>
 
 using namespace penumbra;
@@ -101,6 +104,17 @@ bool g_primal_robust = false; // the primal's Embree flags (Parameters later tur
 double g_primal_seconds_per_sample = 0, g_gradient_seconds_per_sample = 0;
 size_t g_gradient_dimension = 0;
 double g_derivative_seconds_per_sample = 0, g_derivative_seconds_per_unit = 0, g_gradient_seconds_per_unit = 0;
+// The peak resident set of the primal, the forward-mode derivative, the boundary terms and the gradient on the
+// 200k-triangle scene: Linux's high-water mark (VmHWM), reset before each (clear_refs 5; the scene is loaded).
+double g_peak_mb[4] = {0, 0, 0, 0};
+const char* const PeakNames[4] = {"primal", "forward-mode derivative", "boundary terms", "gradient"};
+void reset_peak_rss() { std::ofstream("/proc/self/clear_refs") << "5"; }
+double peak_rss_mb() {
+    std::ifstream status("/proc/self/status");
+    for (std::string line; std::getline(status, line);)
+        if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+    return 0;
+}
 
 // Renders `s` with `opt` for as long as the benchmark runs; the totals of the render statistics.
 struct RenderTotals {
@@ -119,12 +133,14 @@ RenderTotals time_renders(benchmark::State& state, const Scene& s, const RenderO
 }
 
 void BM_PathPrimal(benchmark::State& state) {
+    reset_peak_rss();
     g_primal_robust = scene().robust_intersections;
     RenderOptions opt;
     opt.spp = 4;
     const RenderTotals t = time_renders(state, scene(), opt);
     g_path_rays_per_s = t.rays / t.seconds;
     g_primal_seconds_per_sample = t.seconds / t.samples;
+    g_peak_mb[0] = peak_rss_mb();
     state.counters["rays/s"] = g_path_rays_per_s;
     state.counters["samples/s"] = t.samples / t.seconds;
     state.counters["triangles"] = double(scene().triangle_count());
@@ -228,6 +244,7 @@ double g_surface_rays_per_s = 0;
 
 // Reverse mode with an adjoint of ones (the gradient of the image sum), all data parameters enabled.
 void BM_Gradient(benchmark::State& state) {
+    reset_peak_rss();
     Parameters params(scene());
     params.enable_all_data();
     const Film& film = *scene().sensor->film;
@@ -246,6 +263,7 @@ void BM_Gradient(benchmark::State& state) {
     g_gradient_seconds_per_sample = seconds / samples;
     g_gradient_seconds_per_unit = seconds / units;
     g_gradient_dimension = size_t(params.dimension());
+    g_peak_mb[3] = peak_rss_mb();
     state.counters["parameters"] = double(params.dimension());
     state.counters["samples/s"] = samples / seconds;
 }
@@ -294,6 +312,7 @@ BENCHMARK(BM_TriangleCount)->DenseRange(0, 3)->Unit(benchmark::kMillisecond)->Mi
 BENCHMARK(BM_PathPrimal)->Unit(benchmark::kMillisecond)->MinTime(3.0)->UseRealTime();
 // Forward mode along a translation of the mesh (every vertex moves).
 void BM_Derivative(benchmark::State& state) {
+    reset_peak_rss();
     Parameters params(scene());
     params.enable({{scene().shapes[0]->id.empty() ? "shape_0.translate" : scene().shapes[0]->id + ".translate", {0, 1, 0}}});
     const Film& film = *scene().sensor->film;
@@ -310,6 +329,7 @@ void BM_Derivative(benchmark::State& state) {
     }
     g_derivative_seconds_per_sample = seconds / samples;
     g_derivative_seconds_per_unit = seconds / units;
+    g_peak_mb[1] = peak_rss_mb();
     state.counters["samples/s"] = samples / seconds;
 }
 
@@ -320,6 +340,7 @@ const char* const BoundaryTermNames[3] = {"primary", "direct", "indirect"};
 
 void BM_Boundary(benchmark::State& state) {
     const int term = int(state.range(0));
+    if (term == 0) reset_peak_rss(); // the peak over the three terms
     Parameters params(scene());
     params.enable({{scene().shapes[0]->id.empty() ? "shape_0.translate" : scene().shapes[0]->id + ".translate", {0, 1, 0}}});
     const Film& film = *scene().sensor->film;
@@ -344,6 +365,7 @@ void BM_Boundary(benchmark::State& state) {
     g_boundary_seconds_per_sample[term] = seconds / samples;
     g_boundary_seconds_per_unit[term] = seconds / cost.units();
     state.SetLabel(BoundaryTermNames[term]);
+    g_peak_mb[2] = peak_rss_mb();
     state.counters["samples/s"] = samples / seconds;
 }
 
@@ -398,6 +420,12 @@ int main(int argc, char** argv) {
                 std::printf(" %s %.2f,", BoundaryTermNames[term], g_boundary_seconds_per_unit[term] / g_derivative_seconds_per_unit);
         if (g_gradient_seconds_per_unit > 0)
             std::printf(" reverse interior %.2f", g_gradient_seconds_per_unit / g_derivative_seconds_per_unit);
+        std::printf("\n");
+    }
+    if (g_peak_mb[3] > 0) {
+        std::printf("peak resident memory (MB) on the %zu-triangle scene:", scene().triangle_count());
+        for (int k = 0; k < 4; ++k)
+            if (g_peak_mb[k] > 0) std::printf(" %s %.0f,", PeakNames[k], g_peak_mb[k]);
         std::printf("\n");
     }
     benchmark::Shutdown();
