@@ -43,17 +43,19 @@ struct Outputs {
     MethodGradient gradient;
 };
 
-// Render, and psdr's derivative and gradient of `param`; every output must be finite.
-inline Outputs render_and_differentiate(Scene& scene, const std::string& param, const std::string& method = "psdr") {
+// A render at `render_spp`, and the method's derivative and gradient of `param` at `spp`; every output must be
+// finite.
+inline Outputs render_and_differentiate(Scene& scene, const std::string& param, const std::string& method = "psdr",
+                                        int render_spp = 4, int spp = 8) {
     Outputs out;
     RenderOptions ro;
-    ro.spp = 4;
+    ro.spp = render_spp;
     const Image image = render(scene, ro, &out.render);
     EXPECT_TRUE(finite(image)) << "render";
     Parameters params(scene);
     params.enable({parse_param_selection(param)});
     MethodRun run;
-    run.spp = 8;
+    run.spp = spp;
     out.derivative = make_method(method, MethodOptions())->derivative(scene, params, run);
     EXPECT_TRUE(finite(out.derivative.derivative)) << method << " derivative of " << param;
     out.gradient = make_method(method, MethodOptions())

@@ -2,10 +2,8 @@
 // (getrusage) after a render, a forward-mode derivative and a reverse-mode gradient at 16x the samples, and
 // after 200 optimization iterations against 20, grows by less than 10%. (ctest runs each test in its own
 // process, so the peak is this test's.)
-#include "diff/method.h"
 #include "optim/optimize.h"
-#include "render/render.h"
-#include "scene/scene.h"
+#include "robustness_test_util.h"
 
 #include <gtest/gtest.h>
 #include <sys/resource.h>
@@ -14,6 +12,7 @@
 #include <filesystem>
 
 using namespace penumbra;
+using namespace penumbra::test;
 namespace fs = std::filesystem;
 
 namespace {
@@ -24,27 +23,13 @@ double peak_rss_mb() {
     return double(usage.ru_maxrss) / 1024.0;
 }
 
-// A render, psdr's derivative and its gradient at `spp`.
-void render_and_differentiate(Scene& scene, int spp) {
-    RenderOptions ro;
-    ro.spp = spp;
-    render(scene, ro);
-    Parameters params(scene);
-    params.enable({parse_param_selection("tall_box.translate=1,0,0")});
-    MethodRun run;
-    run.spp = spp;
-    make_method("psdr", MethodOptions())->derivative(scene, params, run);
-    const Film& film = *scene.sensor->film;
-    make_method("psdr", MethodOptions())->gradient(scene, params, Image(film.width, film.height, Color3f(1.f)), run);
-}
-
 } // namespace
 
 TEST(MemoryBound, PeakMemoryDoesNotGrowWithSamples) {
     auto scene = load_scene(PENUMBRA_SOURCE_DIR "/scenes/cbox/cbox.xml", {{"res", "24"}});
-    render_and_differentiate(*scene, 4);
+    render_and_differentiate(*scene, "tall_box.translate=1,0,0", "psdr", 4, 4);
     const double at_4 = peak_rss_mb();
-    render_and_differentiate(*scene, 64);
+    render_and_differentiate(*scene, "tall_box.translate=1,0,0", "psdr", 64, 64);
     const double at_64 = peak_rss_mb();
     std::printf("  peak RSS: %.1f MB at 4 spp, %.1f MB at 64 spp\n", at_4, at_64);
     EXPECT_LT(at_64, 1.1 * at_4);

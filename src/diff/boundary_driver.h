@@ -15,8 +15,8 @@
 #include "render/path_tracer.h"
 
 #include <algorithm>
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <utility>
 
 #include <tbb/enumerable_thread_specific.h>
@@ -179,11 +179,7 @@ void boundary_gradient(const Scene& scene, const Parameters& params, const Image
         }
         tape.clear();
     });
-    std::vector<double> sum(dim, 0.0);
-    for (const auto& g : local)
-        for (size_t k = 0; k < dim; ++k) sum[k] += g[k];
-    chain_vertex_normal_gradient(params, sum);
-    for (size_t k = 0; k < sum.size(); ++k) gradient[k] += sum[k];
+    add_chained_gradient(params, local, gradient);
     if (options.cost)
         for (const SampleCost& c : costs) *options.cost += c;
 }

@@ -1,7 +1,5 @@
 #include "diff/dpm.h"
 
-#include <atomic>
-
 #include "core/batch_stats.h"
 #include "core/interrupt.h"
 #include "core/seconds.h"
@@ -18,6 +16,7 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
+#include <atomic>
 #include <chrono>
 
 namespace penumbra {
@@ -179,7 +178,8 @@ std::vector<double> total(const Parameters& params, const tbb::enumerable_thread
     return sum;
 }
 
-uint64_t dropped(const tbb::enumerable_thread_specific<ReverseSweep>& sweeps) {
+// The threads' count of dropped paths.
+uint64_t dropped_paths(const tbb::enumerable_thread_specific<ReverseSweep>& sweeps) {
     uint64_t n = 0;
     for (const ReverseSweep& s : sweeps) n += s.dropped;
     return n;
@@ -194,6 +194,7 @@ DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const
     const bool screen = o.variant == DpmVariant::G;
     ImageBatches primal_batches, derivative_batches, x_batches, y_batches;
     std::atomic<uint64_t> dropped{0};
+    const std::vector<float> direction = tape_direction(params);
     for (int b = 0; b < o.batches; ++b) {
         Image primal(film.width, film.height), derivative(film.width, film.height);
         Image motion_x(film.width, film.height), motion_y(film.width, film.height);
@@ -202,7 +203,6 @@ DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const
         })
                                          : std::function<void(float)>();
         tbb::enumerable_thread_specific<std::vector<float>> tangents;
-        const std::vector<float> direction = tape_direction(params);
         const float inv = 1.f / float(o.spp);
         // Pixels are disjoint within a pass's tiles: each pixel is written by one thread at a time.
         for_each_path(
@@ -266,7 +266,7 @@ Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image&
             sweep.run();
         });
     out.values = total(params, sweeps);
-    out.cost.dropped = dropped(sweeps);
+    out.cost.dropped = dropped_paths(sweeps);
     out.warnings = settings_warnings(scene);
     out.seconds = seconds_since(start);
     return out;
@@ -316,7 +316,7 @@ DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, 
     DpmMatching out;
     out.loss = loss.value;
     out.gradient = Gradient{total(params, sweeps), settings_warnings(scene), primal, 0.0, {}};
-    out.gradient.cost.dropped = dropped(sweeps);
+    out.gradient.cost.dropped = dropped_paths(sweeps);
     out.gradient.seconds = seconds_since(start);
     return out;
 }

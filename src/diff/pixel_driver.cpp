@@ -156,13 +156,13 @@ DerivativeImage pixel_derivative(const PixelLoop& loop) {
     const int B = loop.options.batches;
     ImageBatches primal, derivative;
     SharedSampleCost cost;
+    const std::vector<float> direction = tape_direction(loop.params);
     for (int b = 0; b < B; ++b) {
         auto progress = loop.options.progress
                             ? std::function<void(float)>([&, b](float f) { loop.options.progress((b + f) / B); })
                             : std::function<void(float)>();
         const uint64_t seed = loop.options.seed + 0x9E3779B97F4A7C15ULL * uint64_t(b);
         PixelSums s{Image(film.width, film.height), Image(film.width, film.height)};
-        const std::vector<float> direction = tape_direction(loop.params);
         for_each_sample(loop, seed, progress, cost,
                         [&](TileSamples& tile) { return ForwardPixels(loop, direction, tile, s); });
         if (loop.film_edge) {
@@ -208,11 +208,7 @@ Gradient pixel_gradient(const PixelLoop& loop, const Image& adjoint) {
         cost.add({0, edge_cost.rays, edge_cost.tape_nodes, edge_cost.dropped});
     }
     result.cost = cost.get();
-    std::vector<double> sum(dim, 0.0);
-    for (const std::vector<double>& g : gradients)
-        for (size_t k = 0; k < dim; ++k) sum[k] += g[k];
-    chain_vertex_normal_gradient(loop.params, sum);
-    for (size_t k = 0; k < sum.size(); ++k) result.values[k] += sum[k];
+    add_chained_gradient(loop.params, gradients, result.values);
     result.seconds = seconds_since(loop.start);
     return result;
 }

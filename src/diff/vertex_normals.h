@@ -25,4 +25,15 @@ std::vector<float> tape_direction(const Parameters& params);
 // swept back to the vertex positions, and `gradient` is cut to params.dimension().
 void chain_vertex_normal_gradient(const Parameters& params, std::vector<double>& gradient);
 
+// Adds the threads' reverse-mode sums (each tape_dimension() values) to `gradient` (dimension() values), the
+// vertex normals' adjoints chained to the positions.
+template <typename ThreadGradients>
+void add_chained_gradient(const Parameters& params, const ThreadGradients& threads, std::vector<double>& gradient) {
+    std::vector<double> sum(size_t(params.tape_dimension()), 0.0);
+    for (const std::vector<double>& g : threads)
+        for (size_t k = 0; k < sum.size(); ++k) sum[k] += g[k];
+    chain_vertex_normal_gradient(params, sum);
+    for (size_t k = 0; k < sum.size(); ++k) gradient[k] += sum[k];
+}
+
 } // namespace penumbra
