@@ -157,13 +157,15 @@ TEST(XmlParser, DefaultsDefinesAndSubstitution) {
             <string name="label" value="$res x $res px"/>
         </sampler>)");
     {
-        const XmlNode& n = only_object(parse_xml_string(xml));
+        const XmlScene s = parse_xml_string(xml);
+        const XmlNode& n = only_object(s);
         EXPECT_EQ(n.type, "independent");
         EXPECT_EQ(n.props.get_int("sample_count"), 4); // the first <default> wins
         EXPECT_EQ(n.props.get_string("label"), "64 x 64 px");
     }
     {
-        const XmlNode& n = only_object(parse_xml_string(xml, ".", {{"spp", "16"}, {"res", "8"}}));
+        const XmlScene s = parse_xml_string(xml, ".", {{"spp", "16"}, {"res", "8"}});
+        const XmlNode& n = only_object(s);
         EXPECT_EQ(n.props.get_int("sample_count"), 16); // -D beats <default>
         EXPECT_EQ(n.props.get_string("label"), "8 x 8 px");
     }

@@ -587,7 +587,9 @@ class Parser {
             const auto it = scene_.ids.find(c.ref_id);
             if (it == scene_.ids.end())
                 throw LoadError(c.location, "reference to unknown id '" + c.ref_id + "'");
-            c.node = it->second;
+            // A ref does not own its target (`ids` does): refs may point forward, so owning ones could form a
+            // cycle (<bsdf id="a"><ref id="a"/></bsdf>, refused later by the loader) and leak the tree.
+            c.node = std::shared_ptr<XmlNode>(std::shared_ptr<XmlNode>(), it->second.get());
         }
     }
 

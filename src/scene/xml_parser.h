@@ -19,7 +19,7 @@ struct XmlNode;
 struct XmlChild {
     std::string name;              // the `name` attribute (empty when absent)
     std::string ref_id;            // the id of a <ref>; empty for inline declarations
-    std::shared_ptr<XmlNode> node; // the declared or referenced object (refs resolve to the same node)
+    std::shared_ptr<XmlNode> node; // the declared object, or the referenced one (not owned: XmlScene::ids owns it)
     SourceLocation location;       // where the declaration or <ref> appears
 };
 
