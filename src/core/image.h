@@ -2,6 +2,7 @@
 #pragma once
 #include "core/vector.h"
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -17,8 +18,13 @@ struct Image {
     const Color3f& at(int x, int y) const { return pixels[size_t(y) * width + x]; }
 };
 
+// The largest image read_image accepts: 2^26 pixels (e.g. 8192 x 8192, or 16384 x 4096), 768 MB as float RGB.
+// The size in a file's header is checked before anything is allocated for it.
+constexpr int64_t MaxImagePixels = int64_t(1) << 26;
+
 // Reads EXR (linear) or an 8-bit/HDR format via stb; 8-bit images are converted from sRGB to linear when
-// `srgb_to_linear` is set (Mitsuba's `raw=false`). Throws Error naming the file on failure.
+// `srgb_to_linear` is set (Mitsuba's `raw=false`). Throws Error naming the file on failure, and for images of
+// more than MaxImagePixels pixels.
 Image read_image(const std::string& path, bool srgb_to_linear = true);
 // Writes by extension: .exr (32-bit float RGB) or .png (sRGB-encoded, clamped 8-bit). The file is written to a
 // temporary name and renamed, so a failed write never leaves a partial file. Throws Error on failure.
