@@ -382,7 +382,7 @@ TEST(MediaLoading, MalformedVdbFilesGiveOneClearError) {
     write_grid_scene(dir, "fixture.vdb", "<string name=\"grid\" value=\"smoke\"/>\n");
     EXPECT_CONTAINS(load_error(dir.str()),
                     "scene.xml:5: gridvolume: 'fixture.vdb': no grid named 'smoke' (the file "
-                    "holds 'density' (float), 'empty' (float), 'temperature' (float), 'velocity' (vec3s))");
+                    "holds 'velocity' (vec3s), 'density' (float), 'temperature' (float), 'empty' (float))"); // file order
     write_grid_scene(dir, "fixture.vdb", "<string name=\"grid\" value=\"velocity\"/>\n");
     EXPECT_CONTAINS(load_error(dir.str()), "'fixture.vdb': grid 'velocity' holds vec3s values, not float");
     write_grid_scene(dir, "fixture.vdb", "<string name=\"grid\" value=\"empty\"/>\n");

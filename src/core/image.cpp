@@ -17,6 +17,9 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
 #include <memory>
 
 namespace penumbra {
@@ -34,11 +37,26 @@ std::string lower_extension(const std::string& path) {
     throw Error(what + " '" + path + "': " + reason);
 }
 
+// Checked before anything is allocated for the pixels: a header may state any size, whatever the data holds.
+void check_image_size(int64_t width, int64_t height, int64_t max_pixels, const std::string& path) {
+    if (width <= 0 || height <= 0)
+        fail("read_image", path,
+             "invalid image size " + std::to_string(width) + " x " + std::to_string(height));
+    if (width > max_pixels / height)
+        fail("read_image", path,
+             "the image is " + std::to_string(width) + " x " + std::to_string(height) +
+                 " pixels, more than the " + std::to_string(max_pixels) + " that penumbra reads");
+}
+
 // EXR: R,G,B channels (any of half/float/uint, converted to float by the library), or a single Y channel.
-Image read_exr(const std::string& path) {
+Image read_exr(const std::string& path, int64_t max_pixels) {
     try {
         Imf::InputFile file(path.c_str());
         const Imath::Box2i dw = file.header().dataWindow();
+        check_image_size(int64_t(dw.max.x) - dw.min.x + 1, int64_t(dw.max.y) - dw.min.y + 1, max_pixels, path);
+        // Missing pixel data would make readPixels throw anyway; rejecting it here also spares allocating an
+        // image of the size that a truncated or corrupt header states.
+        if (!file.isComplete()) fail("read_image", path, "incomplete file (pixel data is missing)");
         const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
         const Imf::ChannelList& channels = file.header().channels();
         const bool rgb = channels.findChannel("R") && channels.findChannel("G") && channels.findChannel("B");
@@ -78,20 +96,50 @@ std::string stb_reason() {
     return reason ? reason : "unknown stb_image error";
 }
 
-// 8/16-bit formats are sRGB-encoded unless `srgb` is false; Radiance HDR is linear.
-Image read_stb(const std::string& path, bool srgb) {
+// stb_image grows its buffer of a PNG's compressed data to each IDAT chunk's stated length before reading it:
+// a chunk claiming gigabytes in a small file must be rejected first.
+void check_png_chunks(const std::vector<unsigned char>& file, const std::string& path) {
+    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    if (file.size() < 8 || !std::equal(signature, signature + 8, file.begin())) return;
+    for (size_t pos = 8; pos + 8 <= file.size();) {
+        const uint32_t length = uint32_t(file[pos]) << 24 | uint32_t(file[pos + 1]) << 16 |
+                                uint32_t(file[pos + 2]) << 8 | uint32_t(file[pos + 3]);
+        const std::string type(file.begin() + long(pos) + 4, file.begin() + long(pos) + 8);
+        const size_t left = file.size() - pos - 8;
+        if (length > left)
+            fail("read_image", path,
+                 "corrupt PNG: chunk '" + type + "' states " + std::to_string(length) + " bytes, but only " +
+                     std::to_string(left) + " follow");
+        if (type == "IEND") return;
+        pos += 8 + size_t(length) + 4; // length, type, data, CRC
+    }
+}
+
+// 8/16-bit formats are sRGB-encoded unless `srgb` is false; Radiance HDR is linear. The file is read into
+// memory so that its size is checked (stbi_info) before stb_image decodes it.
+Image read_stb(const std::string& path, bool srgb, int64_t max_pixels) {
+    std::ifstream in(path, std::ios::binary);
+    const std::vector<unsigned char> file((std::istreambuf_iterator<char>(in)),
+                                          std::istreambuf_iterator<char>());
+    if (!in.eof() && in.fail()) fail("read_image", path, "cannot read the file");
+    if (file.size() > size_t(std::numeric_limits<int>::max())) fail("read_image", path, "file too large");
+    const stbi_uc* bytes = file.data();
+    const int length = int(file.size());
     int w = 0, h = 0, n = 0;
+    if (!stbi_info_from_memory(bytes, length, &w, &h, &n)) fail("read_image", path, stb_reason());
+    check_image_size(w, h, max_pixels, path);
+    check_png_chunks(file, path);
     auto decode = [&](float v) { return srgb ? srgb_to_linear(v) : v; };
     Image image;
-    if (stbi_is_hdr(path.c_str())) {
-        std::unique_ptr<float, void (*)(void*)> data(stbi_loadf(path.c_str(), &w, &h, &n, 3),
+    if (stbi_is_hdr_from_memory(bytes, length)) {
+        std::unique_ptr<float, void (*)(void*)> data(stbi_loadf_from_memory(bytes, length, &w, &h, &n, 3),
                                                      stbi_image_free);
         if (!data) fail("read_image", path, stb_reason());
         image = Image(w, h);
         for (size_t i = 0; i < image.pixels.size(); ++i)
             image.pixels[i] = Color3f(data.get()[3 * i], data.get()[3 * i + 1], data.get()[3 * i + 2]);
-    } else if (stbi_is_16_bit(path.c_str())) {
-        std::unique_ptr<stbi_us, void (*)(void*)> data(stbi_load_16(path.c_str(), &w, &h, &n, 3),
+    } else if (stbi_is_16_bit_from_memory(bytes, length)) {
+        std::unique_ptr<stbi_us, void (*)(void*)> data(stbi_load_16_from_memory(bytes, length, &w, &h, &n, 3),
                                                        stbi_image_free);
         if (!data) fail("read_image", path, stb_reason());
         image = Image(w, h);
@@ -99,7 +147,7 @@ Image read_stb(const std::string& path, bool srgb) {
             for (int c = 0; c < 3; ++c)
                 image.pixels[i][c] = decode(data.get()[3 * i + c] / 65535.f);
     } else {
-        std::unique_ptr<stbi_uc, void (*)(void*)> data(stbi_load(path.c_str(), &w, &h, &n, 3),
+        std::unique_ptr<stbi_uc, void (*)(void*)> data(stbi_load_from_memory(bytes, length, &w, &h, &n, 3),
                                                        stbi_image_free);
         if (!data) fail("read_image", path, stb_reason());
         // Decode through a 256-entry table: the sRGB curve is the expensive part for large textures.
@@ -161,9 +209,9 @@ float linear_to_srgb(float v) {
     return v <= 0.0031308f ? v * 12.92f : 1.055f * std::pow(v, 1.f / 2.4f) - 0.055f;
 }
 
-Image read_image(const std::string& path, bool srgb) {
+Image read_image(const std::string& path, bool srgb, int64_t max_pixels) {
     if (!std::filesystem::is_regular_file(path)) fail("read_image", path, "no such file");
-    return lower_extension(path) == ".exr" ? read_exr(path) : read_stb(path, srgb);
+    return lower_extension(path) == ".exr" ? read_exr(path, max_pixels) : read_stb(path, srgb, max_pixels);
 }
 
 void write_image(const std::string& path, const Image& image) {

@@ -2,6 +2,7 @@
 #pragma once
 #include "core/vector.h"
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -17,9 +18,14 @@ struct Image {
     const Color3f& at(int x, int y) const { return pixels[size_t(y) * width + x]; }
 };
 
+// The largest image read_image accepts by default: 2^28 pixels (16384 x 16384; a 16k x 8k environment map is
+// half of it), 3 GiB as float RGB. The size in a file's header is checked before anything is allocated for it.
+constexpr int64_t MaxImagePixels = int64_t(1) << 28;
+
 // Reads EXR (linear) or an 8-bit/HDR format via stb; 8-bit images are converted from sRGB to linear when
-// `srgb_to_linear` is set (Mitsuba's `raw=false`). Throws Error naming the file on failure.
-Image read_image(const std::string& path, bool srgb_to_linear = true);
+// `srgb_to_linear` is set (Mitsuba's `raw=false`). Throws Error naming the file on failure, and for images of
+// more than `max_pixels` pixels.
+Image read_image(const std::string& path, bool srgb_to_linear = true, int64_t max_pixels = MaxImagePixels);
 // Writes by extension: .exr (32-bit float RGB) or .png (sRGB-encoded, clamped 8-bit). The file is written to a
 // temporary name and renamed, so a failed write never leaves a partial file. Throws Error on failure.
 void write_image(const std::string& path, const Image& image);

@@ -39,9 +39,9 @@ int reference_spp(const nlohmann::json& entry, const char* key, const std::strin
 
 // As with scene files, a misspelt field is an error rather than a silent default.
 void reject_unknown(const nlohmann::json& object, std::initializer_list<const char*> known, const std::string& where) {
-    for (const auto& [key, value] : object.items())
-        if (std::none_of(known.begin(), known.end(), [&](const char* k) { return key == k; }))
-            throw Error(where + ": unknown field '" + key + "'");
+    for (auto it = object.begin(); it != object.end(); ++it)
+        if (std::none_of(known.begin(), known.end(), [&](const char* k) { return it.key() == k; }))
+            throw Error(where + ": unknown field '" + it.key() + "'");
 }
 
 template <typename T> T positive(T value, const char* key, const std::string& where) {

@@ -110,8 +110,9 @@ void for_each_path(const Scene& scene, const Parameters& params, const DpmOption
                     merged.clear();
                     Color3f sum(0.f);
                     float total = 0.f;
+                    // vp captured explicitly: clang before 16 cannot capture a structured binding implicitly.
                     for_each_merged_photon(map, vp, radius, s.kernel, s.max_depth,
-                                           [&](const Photon& ph, float kernel, const Color3f& f) {
+                                           [&, &vp = vp](const Photon& ph, float kernel, const Color3f& f) {
                                                const Color3f c = f * ph.flux * vp.beta * (kernel * norm);
                                                if (!is_finite(c)) return;
                                                merged.push_back({&ph, c});

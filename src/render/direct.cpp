@@ -58,10 +58,13 @@ void DirectIntegrator::sample(const Scene& scene, Sampler& sampler, const Ray& r
         const SurfaceInteraction3f si2 = scene.intersect(si.spawn_ray(d));
         ++rays.rays;
         const bool delta = (bs.sampled_type & BSDFDelta) != 0;
-        for_each_emitter_hit(scene, si, d, si2, [&](const Emitter*, const Color3f& Le, float emitter_pdf) {
-            const float w = delta ? 1.f : mis_power(bs.pdf * frac_bsdf, emitter_pdf * frac_lum);
-            L += weight * Le * (w / float(bsdf_samples_));
-        });
+        // bs and weight captured explicitly: clang before 16 cannot capture structured bindings implicitly.
+        for_each_emitter_hit(
+            scene, si, d, si2,
+            [&, &bs = bs, &weight = weight](const Emitter*, const Color3f& Le, float emitter_pdf) {
+                const float w = delta ? 1.f : mis_power(bs.pdf * frac_bsdf, emitter_pdf * frac_lum);
+                L += weight * Le * (w / float(bsdf_samples_));
+            });
     }
     out[0] = L;
 }

@@ -1,7 +1,7 @@
 // Film (`hdrfilm`) and reconstruction filters (`box`, `tent`, `gaussian`) with Mitsuba 3's parameters.
 //
 // hdrfilm:
-//   width, height     integer  768, 576
+//   width, height     integer  768, 576  at most MaxFilmSide (65536) each
 //   file_format       string   openexr   openexr | exr (the only output format)
 //   pixel_format      string   rgb       luminance | luminance_alpha | rgb | rgba | xyz | xyza; EXR channels
 //                                        Y, Y+A, R,G,B, R,G,B+A, X,Y,Z, X,Y,Z+A (alpha: the filtered fraction
@@ -181,10 +181,17 @@ std::shared_ptr<Object> make_rfilter(const Properties& props, const LoadContext&
 std::shared_ptr<Object> make_film(const Properties& props, const LoadContext& ctx) {
     if (props.plugin() != "hdrfilm") throw_unsupported_plugin(props, ObjectKind::Film);
     auto film = std::make_shared<Film>();
-    film->width = int(props.get_int("width", 768));
-    film->height = int(props.get_int("height", 576));
-    if (film->width <= 0) props.raise("width", "width must be positive");
-    if (film->height <= 0) props.raise("height", "height must be positive");
+    // Sizes and offsets are checked as the 64-bit integers they are parsed as, before they are narrowed to
+    // int (a width of 2^32 + 10 must not become 10, nor crop_offset_x + crop_width overflow).
+    auto film_int = [&](const char* name, int64_t def, int64_t lo) {
+        const int64_t v = props.get_int(name, def);
+        if (v < lo || v > MaxFilmSide)
+            props.raise(name, std::string(name) + " must be in [" + std::to_string(lo) + ", " +
+                                  std::to_string(MaxFilmSide) + "], got " + std::to_string(v));
+        return int(v);
+    };
+    film->width = film_int("width", 768, 1);
+    film->height = film_int("height", 576, 1);
 
     // Index of the value in `allowed` (case-insensitive, as Mitsuba lowercases these strings).
     auto check_choice = [&](const char* name, const char* def, std::initializer_list<const char*> allowed) {
@@ -210,9 +217,9 @@ std::shared_ptr<Object> make_film(const Properties& props, const LoadContext& ct
     if (props.has("banner")) props.get_bool("banner", true);
     // Mitsuba's Film: the crop window must lie inside the full frame.
     film->full_size = Vec2i(film->width, film->height);
-    film->crop_offset = Vec2i(int(props.get_int("crop_offset_x", 0)), int(props.get_int("crop_offset_y", 0)));
-    film->width = int(props.get_int("crop_width", film->full_size.x - film->crop_offset.x));
-    film->height = int(props.get_int("crop_height", film->full_size.y - film->crop_offset.y));
+    film->crop_offset = Vec2i(film_int("crop_offset_x", 0, 0), film_int("crop_offset_y", 0, 0));
+    film->width = film_int("crop_width", std::max(film->full_size.x - film->crop_offset.x, 1), 1);
+    film->height = film_int("crop_height", std::max(film->full_size.y - film->crop_offset.y, 1), 1);
     if (film->crop_offset.x < 0 || film->crop_offset.x >= film->full_size.x)
         props.raise("crop_offset_x", "crop_offset_x must be in [0, width)");
     if (film->crop_offset.y < 0 || film->crop_offset.y >= film->full_size.y)

@@ -5,6 +5,7 @@
 #include "core/vector.h"
 #include "scene/object.h"
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -47,6 +48,9 @@ public:
     PENUMBRA_FOR_EACH_SCALAR(PENUMBRA_FILTER_IMPL)
 #undef PENUMBRA_FILTER_IMPL
 };
+
+// The largest film side (width, height, crop sizes and offsets) a scene may ask for.
+constexpr int64_t MaxFilmSide = 65536;
 
 class Film : public Object {
 public:

@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "core/image.h"
 
+#include <algorithm>
 #include <bit>
 #include <cctype>
 #include <cmath>
@@ -32,6 +33,7 @@ struct PlyProperty {
 struct PlyElement {
     std::string name;
     size_t count = 0;
+    int line = 0; // of its declaration in the header
     std::vector<PlyProperty> properties;
     int index_of(const std::string& name) const {
         for (size_t i = 0; i < properties.size(); ++i)
@@ -132,6 +134,7 @@ PlyHeader parse_header(const std::string& data, const std::string& path) {
             if (el.name.empty() || !in || count < 0)
                 fail(path, line_no, "malformed element declaration (expected 'element <name> <count>')");
             el.count = size_t(count);
+            el.line = line_no;
             header.elements.push_back(std::move(el));
         } else if (keyword == "property") {
             if (header.elements.empty()) fail(path, line_no, "property declared before any element");
@@ -160,6 +163,14 @@ PlyHeader parse_header(const std::string& data, const std::string& path) {
     if (!have_format) fail(path, line_no, "header has no 'format' line");
     header.body_offset = pos;
     header.body_line = line_no + 1;
+    // A record takes at least one byte (binary) or two (ascii: a digit and a separator): a larger count is
+    // corrupt, and is rejected before anything is allocated for it or a loop runs over it.
+    const size_t body_bytes = data.size() - std::min(pos, data.size());
+    for (const PlyElement& el : header.elements)
+        if (el.count > body_bytes)
+            fail(path, el.line,
+                 "element '" + el.name + "' declares " + std::to_string(el.count) + " records, but only " +
+                     std::to_string(body_bytes) + " bytes follow the header");
     return header;
 }
 
@@ -177,6 +188,7 @@ class BodyReader {
     }
 
     double read(PlyType type) { return format_ == PlyFormat::Ascii ? read_ascii(type) : read_binary(type); }
+    size_t remaining() const { return data_.size() - pos_; }
 
     [[noreturn]] void error(const std::string& msg) const {
         fail(path_, format_ == PlyFormat::Ascii ? line_ : 0,
@@ -314,6 +326,13 @@ float attribute_value(double v, PlyType type) {
 size_t list_count(BodyReader& reader, const PlyProperty& prop) {
     const double n = reader.read(prop.count_type);
     if (n < 0) reader.error("negative list length for property '" + prop.name + "'");
+    // Each item takes at least a byte: a longer list is corrupt (and its length may not even fit a size_t).
+    if (n > double(reader.remaining())) {
+        std::ostringstream length;
+        length << n;
+        reader.error("list length " + length.str() + " of property '" + prop.name +
+                     "' exceeds the rest of the file");
+    }
     return size_t(n);
 }
 

@@ -114,7 +114,7 @@ TriangleMesh load_serialized(const std::string& path, int shape_index) {
     if (size_t(count) * entry + 4 > file.size()) throw Error(path + ": corrupt end-of-file mesh dictionary");
     const unsigned char* slot = file.data() + file.size() - 4 - entry * (count - uint32_t(shape_index));
     const uint64_t offset = version == 4 ? load_le<uint64_t>(slot) : load_le<uint32_t>(slot);
-    if (offset + 4 > file.size() || load_le<uint16_t>(file.data() + offset) != SerializedMagic)
+    if (offset > file.size() - 4 || load_le<uint16_t>(file.data() + offset) != SerializedMagic)
         throw Error(path + ": mesh " + std::to_string(shape_index) + " has an invalid file offset");
 
     const std::vector<unsigned char> record = inflate_stream(file, size_t(offset) + 4, path);

@@ -164,7 +164,7 @@ void check_version(const std::string& version, const SourceLocation& loc) {
         }))
         throw LoadError(loc, "could not parse scene version '" + version +
                                  "' (expected major.minor.patch, e.g. 3.0.0)");
-    if (std::stoi(parts[0]) < 2)
+    if (std::strtol(parts[0].c_str(), nullptr, 10) < 2) // saturates (no exception) for huge numbers
         throw LoadError(
             loc, "scene version " + version +
                      " is a Mitsuba 0.6 scene; penumbra reads Mitsuba 3 scenes (version 2.0.0 or later)");
