@@ -182,6 +182,14 @@ DotProducts dot_products(const Scene& scene, const Parameters& params, const Psd
     return r;
 }
 
+// Enables field.vertex_positions along a random direction (components uniform in [-0.5, 0.5)), returned.
+std::vector<float> enable_random_positions(Parameters& params, PCG32& rng) {
+    std::vector<float> d(size_t(params.find("field.vertex_positions").size));
+    for (float& x : d) x = rng.next_float() - 0.5f;
+    params.enable({{"field.vertex_positions", d}});
+    return d;
+}
+
 } // namespace
 
 // Setting vertex_positions recomputes the smooth normals from the new positions (set_values, and displace for
@@ -328,11 +336,8 @@ TEST(SmoothNormals, NormalLeavesChainToThePositions) {
     auto scene = load_scene_string(heightfield_scene(dir.write("ico.obj", icosphere_obj(2)), false));
     Shape& shape = *scene->shapes[0];
     Parameters params(*scene);
-    const Parameter& positions = params.find("field.vertex_positions");
-    std::vector<float> d(size_t(positions.size));
     PCG32 rng(11);
-    for (float& x : d) x = rng.next_float() - 0.5f;
-    params.enable({{"field.vertex_positions", d}});
+    const std::vector<float> d = enable_random_positions(params, rng);
     ASSERT_EQ(params.tape_dimension(), 2 * params.dimension());
     const std::vector<float> direction = tape_direction(params);
     const size_t V = shape.mesh.positions.size();
@@ -375,11 +380,8 @@ TEST(SmoothNormals, ReverseModeMatchesForwardModeUnderVertexPositions) {
     const TempDir dir;
     auto scene = load_scene_string(heightfield_scene(dir.write("ico.obj", icosphere_obj(2)), false));
     Parameters params(*scene);
-    const Parameter& positions = params.find("field.vertex_positions");
-    std::vector<float> d(size_t(positions.size));
     PCG32 rng(5);
-    for (float& x : d) x = rng.next_float() - 0.5f;
-    params.enable({{"field.vertex_positions", d}});
+    enable_random_positions(params, rng);
     PsdrOptions o = interior_and_primary(*scene, 4, 9, 4);
     const DotProducts r = dot_products(*scene, params, o, 6);
     EXPECT_GT(r.scale, 1e-3);

@@ -11,6 +11,7 @@
 #include "diff/method.h"
 #include "diff_cases.h"
 #include "diff_check.h"
+#include "xml_test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -255,6 +256,50 @@ TEST(DpmC, ReverseModeEqualsForwardMode) {
     EXPECT_NEAR(p.forward, p.reverse, 1e-4 * p.scale);
     // Both passes render the same SPPM image.
     for (size_t i = 0; i < d.primal.pixels.size(); ++i) EXPECT_EQ(d.primal.pixels[i], g.primal.pixels[i]);
+}
+
+// Under vertex_positions a mesh's smooth normals are tape leaves chained to the positions once per pass
+// (diff/vertex_normals.h): DPM's reverse mode chains their adjoints as its forward mode does their tangents.
+TEST(DpmC, ReverseModeEqualsForwardModeUnderVertexPositions) {
+    const TempDir dir;
+    // The mirror as a shallow bowl over the rectangle's [-1, 1]^2 (4x4 vertices, no stored normals: smooth
+    // normals computed from the positions), facing +z like the rectangle.
+    std::string obj;
+    for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i) {
+            const float x = -1.f + 2.f * float(i) / 3.f, y = -1.f + 2.f * float(j) / 3.f;
+            obj += "v " + std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(0.1f * (x * x + y * y)) + "\n";
+        }
+    for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i) {
+            const int a = 4 * j + i + 1;
+            obj += "f " + std::to_string(a) + " " + std::to_string(a + 1) + " " + std::to_string(a + 5) + "\n";
+            obj += "f " + std::to_string(a) + " " + std::to_string(a + 5) + " " + std::to_string(a + 4) + "\n";
+        }
+    std::string optics = mirror;
+    const std::string rectangle = R"(<shape type="rectangle" id="mirror">)";
+    optics.replace(optics.find(rectangle), rectangle.size(),
+                   R"(<shape type="obj" id="mirror"><string name="filename" value=")" + dir.write("bowl.obj", obj) + R"("/>)");
+    auto scene = load_scene_string(scene_xml(optics, above));
+    Parameters params(*scene);
+    std::vector<float> d(size_t(params.find("mirror.vertex_positions").size));
+    PCG32 rng(3);
+    for (float& x : d) x = 0.2f * (rng.next_float() - 0.5f);
+    params.enable({{"mirror.vertex_positions", d}});
+    ASSERT_GT(params.tape_dimension(), params.dimension()) << "the bowl's normals should be tape leaves";
+    DpmOptions o;
+    o.spp = 4;
+    o.pixel_fraction = 0.5;
+    o.paths = 2;
+    const DerivativeImage fwd = dpm_derivative(*scene, params, o).image;
+    Image adjoint(16, 16);
+    for (size_t i = 0; i < adjoint.pixels.size(); ++i)
+        adjoint.pixels[i] = Color3f(float(i % 7) - 3.f, 1.f, float(i % 3));
+    const Gradient g = dpm_gradient(*scene, params, adjoint, o);
+    ASSERT_EQ(g.values.size(), size_t(params.dimension()));
+    const AdjointPair p = adjoint_pair(adjoint, fwd.derivative, g.values, params.direction());
+    EXPECT_GT(p.scale, 0.0);
+    EXPECT_NEAR(p.forward, p.reverse, 1e-4 * p.scale);
 }
 
 TEST(DpmC, SameResultWhateverTheThreadCount) {

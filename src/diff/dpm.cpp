@@ -170,12 +170,10 @@ struct ReverseSweep {
     void run() { dropped += !Tape::current().backward(seeds, gradient.data(), scratch); }
 };
 
-// Σ of the threads' gradients (tape_dimension() values), chained to the parameters.
+// Σ of the threads' gradients, chained to the parameters (dimension() values).
 std::vector<double> total(const Parameters& params, const tbb::enumerable_thread_specific<ReverseSweep>& sweeps) {
-    std::vector<double> sum(size_t(params.tape_dimension()), 0.0);
-    for (const ReverseSweep& s : sweeps)
-        for (size_t k = 0; k < sum.size(); ++k) sum[k] += s.gradient[k];
-    chain_vertex_normal_gradient(params, sum);
+    std::vector<double> sum(size_t(params.dimension()), 0.0);
+    add_chained_gradient(params, sweeps, sum, &ReverseSweep::gradient);
     return sum;
 }
 

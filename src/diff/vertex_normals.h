@@ -9,6 +9,7 @@
 #include "core/var.h"
 #include "diff/parameters.h"
 
+#include <functional>
 #include <vector>
 
 namespace penumbra {
@@ -25,13 +26,17 @@ std::vector<float> tape_direction(const Parameters& params);
 // swept back to the vertex positions, and `gradient` is cut to params.dimension().
 void chain_vertex_normal_gradient(const Parameters& params, std::vector<double>& gradient);
 
-// Adds the threads' reverse-mode sums (each tape_dimension() values) to `gradient` (dimension() values), the
-// vertex normals' adjoints chained to the positions.
-template <typename ThreadGradients>
-void add_chained_gradient(const Parameters& params, const ThreadGradients& threads, std::vector<double>& gradient) {
+// Adds the threads' reverse-mode sums (each tape_dimension() values; `gradient_of(thread)` when a thread's state
+// holds more than its sum) to `gradient` (dimension() values), the vertex normals' adjoints chained to the
+// positions.
+template <typename Threads, typename GradientOf = std::identity>
+void add_chained_gradient(const Parameters& params, const Threads& threads, std::vector<double>& gradient,
+                          GradientOf gradient_of = {}) {
     std::vector<double> sum(size_t(params.tape_dimension()), 0.0);
-    for (const std::vector<double>& g : threads)
+    for (const auto& thread : threads) {
+        const std::vector<double>& g = std::invoke(gradient_of, thread);
         for (size_t k = 0; k < sum.size(); ++k) sum[k] += g[k];
+    }
     chain_vertex_normal_gradient(params, sum);
     for (size_t k = 0; k < sum.size(); ++k) gradient[k] += sum[k];
 }

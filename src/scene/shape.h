@@ -35,8 +35,8 @@ public:
     std::shared_ptr<Sensor> sensor;   // a nested sensor measuring the shape (irradiancemeter), or null
     bool face_normals = false;        // ignore per-vertex normals (finalize() must follow a change)
     int vertex_param_index = -1;      // first parameter index of vertex_positions when differentiated
-    int vertex_normal_param_index = -1; // first tape leaf index of its recomputed vertex normals, then
-                                        // (diff/vertex_normals.h)
+    int vertex_normal_param_index = -1; // first tape leaf index of its recomputed vertex normals when its
+                                        // vertex_positions are differentiated (diff/vertex_normals.h)
     // A world-space copy of a shapegroup's shape made by Scene::flatten_instances(): the group shape and the
     // instance's to_world. Its vertices are the group shape's `vertex_positions` moved by that transform.
     const Shape* group_shape = nullptr;
