@@ -35,9 +35,10 @@ struct VolumeGridData {
 VolumeGridData read_vol_file(const std::string& path);
 
 // The float grid `grid_name` of an OpenVDB file (empty: "density" if present, else the first float grid),
-// densified over its active voxel bounding box (inactive voxels hold the grid's background value). Throws
-// VolumeFileError for an unreadable file, a missing or non-float grid, an empty or too large grid, a
-// non-linear transform or a non-finite value.
+// densified over its active voxel bounding box (inactive voxels hold their values, or the background). Read
+// by penumbra's own reader (vdb_layout.h). Throws VolumeFileError for an unreadable or corrupt file, a format
+// version other than 222-224, a missing or non-float grid, an empty or too large grid, a non-linear or
+// singular transform or a non-finite value.
 VolumeGridData read_vdb_file(const std::string& path, const std::string& grid_name);
 
 } // namespace penumbra
