@@ -251,6 +251,25 @@ TEST(VdbReader, RefusesOtherVersionsAndOpenVdbsKnownBadInputs) {
     }
 }
 
+// What a file can make the reader hold follows the dense grid's voxel cap (read_vdb_file's max_voxels).
+TEST(VdbReader, CapsLeavesAndTheDenseGridByTheVoxelLimit) {
+    TempDir dir;
+    const std::string path = dir.str() + "/density.vdb";
+    openvdb::io::File(path).write({rich_grid("density")});
+    auto error = [&](uint64_t max_voxels) {
+        try {
+            read_vdb_file(path, "", max_voxels);
+        } catch (const VolumeFileError& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_EQ(error(2048), "too many leaf nodes (more than 4)");
+    EXPECT_EQ(error(uint64_t(1) << 22),
+              "grid 'density' spans 189 x 160 x 169 voxels, too many to store densely");
+    EXPECT_EQ(read_vdb_file(path, "", 189 * 160 * 169).values.size(), size_t(189 * 160 * 169));
+}
+
 // Bytes of small files (Blosc with active-mask compression, zlib with half floats) set to two other values
 // (all of the first 1024: header, metadata, descriptor, transform, root; every 61st after), and truncations:
 // each load gives a grid or a VolumeFileError (under the sanitizer preset, no memory error either).

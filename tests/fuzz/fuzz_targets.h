@@ -24,9 +24,11 @@ void fuzz_vol(const uint8_t* data, size_t size);             // Mitsuba .vol gri
 void fuzz_vdb(const uint8_t* data, size_t size);             // OpenVDB .vdb grid
 void fuzz_optimize_config(const uint8_t* data, size_t size); // `penumbra optimize` JSON configuration
 
-// The image size the texture harnesses accept (read_image's max_pixels): 2^22 pixels, 48 MB as float RGB, so that
-// a header stating a large size is refused within libFuzzer's memory limit rather than decoded.
+// The image size the texture harnesses accept (read_image's max_pixels): 2^22 pixels, 48 MB as float RGB, so
+// that a header stating a large size is refused within libFuzzer's memory limit rather than decoded.
 constexpr int64_t FuzzMaxImagePixels = int64_t(1) << 22;
+// The same for read_vdb_file's dense grid (16 MiB of floats, against its 1 GiB default).
+constexpr uint64_t FuzzMaxVoxels = uint64_t(1) << 22;
 
 // A directory of this process's own (created on first use, removed at exit) for the files that file-only
 // loaders are given; the path is reused from one input to the next.

@@ -24,8 +24,6 @@ constexpr uint32_t OldestVersion = 222, NewestVersion = 224;
 constexpr const char* FloatTreeType = "Tree_float_5_4_3";
 constexpr const char* HalfSuffix = "_HalfFloat";
 constexpr char UniqueSuffixSeparator = '\x1e';
-// Larger grids would take more than 1 GiB once dense.
-constexpr uint64_t MaxDenseVoxels = uint64_t(1) << 28;
 
 struct GridDescriptor {
     std::string unique_name, name, type, parent;
@@ -259,11 +257,11 @@ std::vector<float> densify(const VdbFloatTree& tree, const Box& box, const int64
 
 } // namespace
 
-VolumeGridData read_vdb_file(const std::string& path, const std::string& grid_name) {
+VolumeGridData read_vdb_file(const std::string& path, const std::string& grid_name, uint64_t max_voxels) {
     VdbInput in(path);
     std::vector<GridDescriptor> grids;
     std::map<std::string, ParsedGrid> parsed; // by unique name
-    VdbBudget budget;
+    VdbBudget budget(max_voxels);
     std::string unread;
     size_t chosen = 0;
     const VdbFloatTree* tree = nullptr;
@@ -303,9 +301,8 @@ VolumeGridData read_vdb_file(const std::string& path, const std::string& grid_na
     const Box box = active_box(*tree);
     if (box.empty()) throw VolumeFileError("grid '" + name + "' has no active voxels");
     const int64_t dim[3] = {box.hi[0] - box.lo[0] + 1, box.hi[1] - box.lo[1] + 1, box.hi[2] - box.lo[2] + 1};
-    if (dim[0] > int64_t(MaxDenseVoxels) || dim[1] > int64_t(MaxDenseVoxels) ||
-        dim[2] > int64_t(MaxDenseVoxels) || uint64_t(dim[0] * dim[1]) > MaxDenseVoxels ||
-        uint64_t(dim[0] * dim[1] * dim[2]) > MaxDenseVoxels)
+    if (dim[0] > int64_t(max_voxels) || dim[1] > int64_t(max_voxels) || dim[2] > int64_t(max_voxels) ||
+        uint64_t(dim[0] * dim[1]) > max_voxels || uint64_t(dim[0] * dim[1] * dim[2]) > max_voxels)
         throw VolumeFileError("grid '" + name + "' spans " + std::to_string(dim[0]) + " x " +
                               std::to_string(dim[1]) + " x " + std::to_string(dim[2]) +
                               " voxels, too many to store densely");

@@ -236,7 +236,9 @@ class TreeReader {
                 read_node_topology(Lower, child);
                 continue;
             }
-            if (budget_.leaves == 0) throw VolumeFileError("too many leaf nodes (more than 2^19)");
+            if (budget_.leaves == 0)
+                throw VolumeFileError("too many leaf nodes (more than " + std::to_string(budget_.max_leaves) +
+                                      ")");
             --budget_.leaves;
             in_.skip(uint64_t(Leaf.words()) * 8);
             tree_.leaves.emplace_back();

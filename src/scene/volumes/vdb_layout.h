@@ -5,6 +5,7 @@
 #pragma once
 #include "scene/volumes/volume_grid.h"
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <fstream>
@@ -74,9 +75,12 @@ struct VdbFloatTree {
     std::vector<VdbLeaf> leaves;
 };
 
-// Caps on what a file may make the reader hold, shared by all the trees of one file.
+// Caps on what a file may make the reader hold, shared by all the trees of one file: as many leaves as the
+// dense grid's voxel cap fills, and 2^22 kept tiles.
 struct VdbBudget {
-    uint64_t leaves = uint64_t(1) << 19; // 2^28 voxels: the dense grid's own cap
+    explicit VdbBudget(uint64_t max_voxels)
+        : max_leaves(std::max<uint64_t>(max_voxels / 512, 1)), leaves(max_leaves) {}
+    uint64_t max_leaves, leaves;
     uint64_t tiles = uint64_t(1) << 22;
 };
 

@@ -5,6 +5,7 @@
 #include "core/transform.h"
 #include "scene/volume.h"
 
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -39,6 +40,9 @@ VolumeGridData read_vol_file(const std::string& path);
 // by penumbra's own reader (vdb_layout.h). Throws VolumeFileError for an unreadable or corrupt file, a format
 // version other than 222-224, a missing or non-float grid, an empty or too large grid, a non-linear or
 // singular transform or a non-finite value.
-VolumeGridData read_vdb_file(const std::string& path, const std::string& grid_name);
+// `max_voxels` caps the dense grid (1 GiB of floats by default; the fuzz harness passes less).
+constexpr uint64_t MaxDenseVoxels = uint64_t(1) << 28;
+VolumeGridData read_vdb_file(const std::string& path, const std::string& grid_name,
+                             uint64_t max_voxels = MaxDenseVoxels);
 
 } // namespace penumbra
