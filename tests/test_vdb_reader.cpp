@@ -234,6 +234,24 @@ TEST(VdbReader, RefusesOtherVersionsAndOpenVdbsKnownBadInputs) {
         EXPECT_STREQ(e.what(),
                      "file format version 221 (penumbra reads 222 to 224: files of OpenVDB 3.0 and later)");
     }
+    // A grid is read within its own bytes: an end offset short of them is an error, not read past.
+    openvdb::io::File(path).write({rich_grid("density")});
+    bytes = read_bytes(path);
+    const size_t type_at = bytes.find("Tree_float_5_4_3");
+    ASSERT_NE(type_at, std::string::npos);
+    const size_t offsets_at = type_at + 16 + 4; // after the type and the empty instance parent name
+    int64_t end = 0;
+    std::memcpy(&end, bytes.data() + offsets_at, 8); // the grid's position
+    end += 100;
+    bytes.replace(offsets_at + 16, 8, reinterpret_cast<const char*>(&end), 8);
+    write_bytes(path, bytes);
+    try {
+        read_vdb_file(path, "");
+        FAIL() << "a grid was read past its end offset";
+    } catch (const VolumeFileError& e) {
+        EXPECT_STREQ(e.what(), "not a readable OpenVDB file (a string's length reaches past its end)");
+    }
+
     const std::string regressions = std::string(PENUMBRA_SOURCE_DIR) + "/tests/fuzz/regressions/vdb/";
     const std::pair<const char*, const char*> known[] = {
         {"openvdb_unzip_uncompressed_chunk_overflows.vdb",

@@ -29,6 +29,7 @@ struct GridDescriptor {
     std::string unique_name, name, type, parent;
     bool half = false;
     uint64_t grid_pos = 0; // where the grid follows its descriptor
+    uint64_t end_pos = 0;  // where it ends: its end offset, or the end of a file without offsets
     bool is_float() const { return type == FloatTreeType; }
     // "float" of Tree_float_5_4_3: the value type OpenVDB names in Grid::valueType().
     std::string value_type() const {
@@ -169,20 +170,25 @@ size_t choose_grid(const std::vector<GridDescriptor>& grids, const std::string& 
 const VdbFloatTree& instance_tree(VdbInput& in, const std::vector<GridDescriptor>& grids,
                                   std::map<std::string, ParsedGrid>& parsed, size_t index,
                                   VdbBudget& budget) {
+    std::map<std::string, size_t> by_unique_name;
+    for (size_t i = 0; i < grids.size(); ++i)
+        by_unique_name.emplace(grids[i].unique_name, i);
     for (size_t hops = 0; hops <= grids.size(); ++hops) {
         const GridDescriptor& d = grids[index];
         auto it = parsed.find(d.unique_name);
         if (it == parsed.end()) {
+            // Each grid is read within its own bytes, so that no file makes the reader pass over one twice.
             in.seek(d.grid_pos);
+            in.set_limit(d.end_pos);
             it = parsed.emplace(d.unique_name, read_grid(in, d, budget)).first;
+            in.set_limit(in.size());
         }
         if (it->second.tree) return *it->second.tree;
-        size_t parent = grids.size();
-        for (size_t i = 0; i < grids.size(); ++i)
-            if (grids[i].unique_name == d.parent) parent = i;
-        if (parent == grids.size() || !grids[parent].is_float() || grids[parent].half != d.half)
+        const auto parent = by_unique_name.find(d.parent);
+        if (parent == by_unique_name.end() || !grids[parent->second].is_float() ||
+            grids[parent->second].half != d.half)
             throw VdbCorrupt("grid '" + d.name + "' is an instance of a missing or different grid");
-        index = parent;
+        index = parent->second;
     }
     throw VdbCorrupt("a cycle of grid instances");
 }
@@ -278,8 +284,10 @@ VolumeGridData read_vdb_file(const std::string& path, const std::string& grid_na
                 const int64_t end = in.read<int64_t>();
                 if (end < int64_t(d.grid_pos) || uint64_t(end) > in.size())
                     throw VdbCorrupt("a grid's end offset outside the file");
+                grids.back().end_pos = uint64_t(end);
                 in.seek(uint64_t(end));
             } else if (d.is_float()) {
+                grids.back().end_pos = in.size();
                 parsed.emplace(d.unique_name, read_grid(in, d, budget));
             } else {
                 // A grid of another type cannot be stepped over in a file written without offsets.

@@ -20,13 +20,14 @@ namespace penumbra {
 static_assert(std::endian::native == std::endian::little, "the .vdb reader assumes a little-endian host");
 
 VdbInput::VdbInput(const std::string& path) : in_(path, std::ios::binary | std::ios::ate) {
-    if (!in_) throw VolumeFileError("cannot open the file");
-    size_ = uint64_t(in_.tellg());
+    const std::streamoff end = in_ ? std::streamoff(in_.tellg()) : -1;
+    if (end < 0) throw VolumeFileError("cannot open the file");
+    size_ = limit_ = uint64_t(end);
     in_.seekg(0);
 }
 
 void VdbInput::seek(uint64_t pos) {
-    if (pos > size_) throw VdbCorrupt("a size in it reaches past its end");
+    if (pos > limit_) throw VdbCorrupt("a size in it reaches past its end");
     in_.seekg(std::streamoff(pos));
     pos_ = pos;
 }

@@ -27,7 +27,9 @@ class VdbInput {
 
     uint64_t size() const { return size_; }
     uint64_t tell() const { return pos_; }
-    uint64_t remaining() const { return size_ - pos_; }
+    uint64_t remaining() const { return limit_ - pos_; }
+    // Reads and seeks end at `limit` (a grid's end offset) instead of the end of the file.
+    void set_limit(uint64_t limit) { limit_ = std::min(std::max(limit, pos_), size_); }
     void seek(uint64_t pos);
     void skip(uint64_t bytes) { seek(pos_ + std::min(bytes, remaining() + 1)); }
     void read(void* dst, uint64_t bytes);
@@ -41,7 +43,7 @@ class VdbInput {
 
   private:
     std::ifstream in_;
-    uint64_t size_ = 0, pos_ = 0;
+    uint64_t size_ = 0, limit_ = 0, pos_ = 0;
 };
 
 // How a grid's node values are stored: the grid's compression flags (OpenVDB's io::COMPRESS_*) and whether
