@@ -252,6 +252,16 @@ TEST(VdbReader, RefusesOtherVersionsAndOpenVdbsKnownBadInputs) {
         EXPECT_STREQ(e.what(), "not a readable OpenVDB file (a string's length reaches past its end)");
     }
 
+    // Names from the file appear in messages printable and at most 64 characters long.
+    openvdb::io::File(path).write({rich_grid(std::string(70, 'n') + "\x07")});
+    try {
+        read_vdb_file(path, "missing");
+        FAIL() << "a missing grid was read";
+    } catch (const VolumeFileError& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  "no grid named 'missing' (the file holds '" + std::string(64, 'n') + "...' (float))");
+    }
+
     const std::string regressions = std::string(PENUMBRA_SOURCE_DIR) + "/tests/fuzz/regressions/vdb/";
     const std::pair<const char*, const char*> known[] = {
         {"openvdb_unzip_uncompressed_chunk_overflows.vdb",

@@ -10,6 +10,7 @@
 #include "scene/volumes/vdb_layout.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <map>
@@ -49,6 +50,15 @@ struct ParsedGrid {
     IndexToWorld transform;
     std::optional<VdbFloatTree> tree; // absent for an instance
 };
+
+// A name from the file, fit for a message: at most 64 characters, non-printable ones as '?'.
+std::string printable(const std::string& name) {
+    std::string p;
+    for (size_t i = 0; i < name.size() && i < 64; ++i)
+        p += std::isprint(uint8_t(name[i])) ? name[i] : '?';
+    return name.size() > 64 ? p + "..." : p;
+}
+std::string quoted(const std::string& name) { return "'" + printable(name) + "'"; }
 
 void skip_metadata(VdbInput& in) {
     const uint32_t count = in.read<uint32_t>();
@@ -121,7 +131,7 @@ IndexToWorld read_transform(VdbInput& in, bool allow_frustum = true) {
         read_transform(in, false); // its linear second map
         t.linear = false;
     } else {
-        throw VdbCorrupt("an unknown transform map '" + type + "'");
+        throw VdbCorrupt("an unknown transform map " + quoted(type));
     }
     return t;
 }
@@ -138,10 +148,14 @@ ParsedGrid read_grid(VdbInput& in, const GridDescriptor& d, VdbBudget& budget) {
     return grid;
 }
 
+// The first 16 grids, each with its value type.
 std::string grid_list(const std::vector<GridDescriptor>& grids) {
     std::string names;
-    for (const auto& g : grids)
-        names += (names.empty() ? "" : ", ") + ("'" + g.name + "' (" + g.value_type() + ")");
+    for (size_t i = 0; i < grids.size() && i < 16; ++i) {
+        names += (names.empty() ? "" : ", ") + quoted(grids[i].name) + " (" +
+                 printable(grids[i].value_type()) + ")";
+    }
+    if (grids.size() > 16) names += ", and " + std::to_string(grids.size() - 16) + " more";
     return names.empty() ? std::string("no grids") : names;
 }
 
@@ -152,12 +166,12 @@ size_t choose_grid(const std::vector<GridDescriptor>& grids, const std::string& 
         for (size_t i = 0; i < grids.size(); ++i) {
             if (grids[i].name != wanted) continue;
             if (!grids[i].is_float())
-                throw VolumeFileError("grid '" + wanted + "' holds " + grids[i].value_type() +
-                                      " values, not float");
+                throw VolumeFileError("grid " + quoted(wanted) + " holds " +
+                                      printable(grids[i].value_type()) + " values, not float");
             return i;
         }
-        throw VolumeFileError("no grid named '" + wanted + "' (the file holds " + grid_list(grids) + unread +
-                              ")");
+        throw VolumeFileError("no grid named " + quoted(wanted) + " (the file holds " + grid_list(grids) +
+                              unread + ")");
     }
     for (size_t i = 0; i < grids.size(); ++i)
         if (grids[i].name == "density" && grids[i].is_float()) return i;
@@ -187,7 +201,7 @@ const VdbFloatTree& instance_tree(VdbInput& in, const std::vector<GridDescriptor
         const auto parent = by_unique_name.find(d.parent);
         if (parent == by_unique_name.end() || !grids[parent->second].is_float() ||
             grids[parent->second].half != d.half)
-            throw VdbCorrupt("grid '" + d.name + "' is an instance of a missing or different grid");
+            throw VdbCorrupt("grid " + quoted(d.name) + " is an instance of a missing or different grid");
         index = parent->second;
     }
     throw VdbCorrupt("a cycle of grid instances");
@@ -208,7 +222,7 @@ Transform index_to_world(const IndexToWorld& t, const std::string& name) {
     for (int row = 0; row < 3; ++row)
         for (int col = 0; col < 4; ++col)
             finite = finite && std::isfinite(r.m[row][col]);
-    if (!finite) throw VolumeFileError("grid '" + name + "' has a singular or non-finite transform");
+    if (!finite) throw VolumeFileError("grid " + name + " has a singular or non-finite transform");
     return Transform(r);
 }
 
@@ -291,7 +305,8 @@ VolumeGridData read_vdb_file(const std::string& path, const std::string& grid_na
                 parsed.emplace(d.unique_name, read_grid(in, d, budget));
             } else {
                 // A grid of another type cannot be stepped over in a file written without offsets.
-                unread = "; grids after '" + d.name + "' cannot be reached in a file without grid offsets";
+                unread =
+                    "; grids after " + quoted(d.name) + " cannot be reached in a file without grid offsets";
                 break;
             }
         }
@@ -300,18 +315,18 @@ VolumeGridData read_vdb_file(const std::string& path, const std::string& grid_na
     } catch (const VdbCorrupt& e) {
         throw VolumeFileError(std::string("not a readable OpenVDB file (") + e.what() + ")");
     }
-    const std::string& name = grids[chosen].name;
+    const std::string name = quoted(grids[chosen].name);
     const ParsedGrid& grid = parsed.at(grids[chosen].unique_name);
     if (!grid.transform.linear)
-        throw VolumeFileError("grid '" + name +
-                              "' has a non-linear (frustum) transform, which is not supported");
+        throw VolumeFileError("grid " + name +
+                              " has a non-linear (frustum) transform, which is not supported");
 
     const Box box = active_box(*tree);
-    if (box.empty()) throw VolumeFileError("grid '" + name + "' has no active voxels");
+    if (box.empty()) throw VolumeFileError("grid " + name + " has no active voxels");
     const int64_t dim[3] = {box.hi[0] - box.lo[0] + 1, box.hi[1] - box.lo[1] + 1, box.hi[2] - box.lo[2] + 1};
     if (dim[0] > int64_t(max_voxels) || dim[1] > int64_t(max_voxels) || dim[2] > int64_t(max_voxels) ||
         uint64_t(dim[0] * dim[1]) > max_voxels || uint64_t(dim[0] * dim[1] * dim[2]) > max_voxels)
-        throw VolumeFileError("grid '" + name + "' spans " + std::to_string(dim[0]) + " x " +
+        throw VolumeFileError("grid " + name + " spans " + std::to_string(dim[0]) + " x " +
                               std::to_string(dim[1]) + " x " + std::to_string(dim[2]) +
                               " voxels, too many to store densely");
 
@@ -323,7 +338,7 @@ VolumeGridData read_vdb_file(const std::string& path, const std::string& grid_na
         if (std::isfinite(out.values[i])) continue;
         const int64_t x = int64_t(i) % dim[0], y = int64_t(i) / dim[0] % dim[1],
                       z = int64_t(i) / (dim[0] * dim[1]);
-        throw VolumeFileError("grid '" + name + "' has a non-finite value at voxel (" +
+        throw VolumeFileError("grid " + name + " has a non-finite value at voxel (" +
                               std::to_string(box.lo[0] + x) + ", " + std::to_string(box.lo[1] + y) + ", " +
                               std::to_string(box.lo[2] + z) + ")");
     }
