@@ -96,7 +96,8 @@ GridDescriptor read_descriptor(VdbInput& in) {
         d.type.resize(d.type.size() - suffix.size());
     }
     d.parent = in.read_string();
-    in.skip(24); // grid, block and end positions (checked where used)
+    in.skip(16);                              // grid and block positions
+    d.end_pos = uint64_t(in.read<int64_t>()); // checked when the file has offsets
     d.grid_pos = in.tell();
     return d;
 }
@@ -291,17 +292,14 @@ VolumeGridData read_vdb_file(const std::string& path, const std::string& grid_na
         if (count < 0) throw VdbCorrupt("a negative grid count");
         for (int32_t g = 0; g < count; ++g) {
             grids.push_back(read_descriptor(in));
-            const GridDescriptor& d = grids.back();
+            GridDescriptor& d = grids.back();
             if (has_offsets) {
-                // The end position is the only offset read: where the next descriptor starts.
-                in.seek(d.grid_pos - 8);
-                const int64_t end = in.read<int64_t>();
-                if (end < int64_t(d.grid_pos) || uint64_t(end) > in.size())
+                // The end offset is the only one used: where the next descriptor starts.
+                if (d.end_pos < d.grid_pos || d.end_pos > in.size())
                     throw VdbCorrupt("a grid's end offset outside the file");
-                grids.back().end_pos = uint64_t(end);
-                in.seek(uint64_t(end));
+                in.seek(d.end_pos);
             } else if (d.is_float()) {
-                grids.back().end_pos = in.size();
+                d.end_pos = in.size();
                 parsed.emplace(d.unique_name, read_grid(in, d, budget));
             } else {
                 // A grid of another type cannot be stepped over in a file written without offsets.

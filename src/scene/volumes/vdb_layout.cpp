@@ -131,11 +131,11 @@ void read_floats(VdbInput& in, const VdbValueCodec& codec, float* dst, int count
         dst[i] = imath_half_to_float(halves[i]);
 }
 
-// The `level.slots()` values of a node (io::readCompressedValues). With active-mask compression only the
-// active values are stored; the inactive ones are the background, its negative, or one or two values
-// stored once, chosen per voxel by a selection mask.
-std::vector<float> read_node_values(VdbInput& in, const VdbValueCodec& codec, const NodeLevel& level,
-                                    const uint64_t* active, float background) {
+// The `level.slots()` values of a node, into `values` (io::readCompressedValues). With active-mask
+// compression only the active values are stored; the inactive ones are the background, its negative, or one
+// or two values stored once, chosen per voxel by a selection mask.
+void read_node_values(VdbInput& in, const VdbValueCodec& codec, const NodeLevel& level,
+                      const uint64_t* active, float background, float* values) {
     const int8_t metadata = in.read<int8_t>();
     if (metadata < NoMaskOrInactiveVals || metadata > NoMaskAndAllVals)
         throw VdbCorrupt("a node's value metadata " + std::to_string(int(metadata)) + " (0 to 6 expected)");
@@ -157,16 +157,11 @@ std::vector<float> read_node_values(VdbInput& in, const VdbValueCodec& codec, co
         for (int w = 0; w < level.words(); ++w)
             stored += std::popcount(active[w]);
     }
-    std::vector<float> values(size_t(slots), 0.f);
-    if (stored == slots) {
-        read_floats(in, codec, values.data(), slots);
-        return values;
-    }
+    if (stored == slots) return read_floats(in, codec, values, slots);
     std::vector<float> kept(size_t(stored), 0.f);
     read_floats(in, codec, kept.data(), stored);
     for (int n = 0, k = 0; n < slots; ++n)
-        values[size_t(n)] = bit(active, n) ? kept[size_t(k++)] : inactive[bit(selection.data(), n)];
-    return values;
+        values[n] = bit(active, n) ? kept[size_t(k++)] : inactive[bit(selection.data(), n)];
 }
 
 class TreeReader {
@@ -179,19 +174,24 @@ class TreeReader {
         tree_.background = in_.read<float>();
         const uint32_t tiles = in_.read<uint32_t>(), children = in_.read<uint32_t>();
         if (uint64_t(tiles) * 17 > in_.remaining()) throw VdbCorrupt("a root tile count beyond its end");
+        std::set<std::array<int32_t, 3>> root_entries;                             // tiles and children
         std::map<std::array<int32_t, 3>, std::pair<size_t, size_t>> root_children; // origin -> leaf range
+        auto read_root_origin = [&] {
+            std::array<int32_t, 3> origin;
+            in_.read(origin.data(), 12);
+            for (int32_t c : origin)
+                if (c % RootChildSize != 0) throw VdbCorrupt("a root entry's origin off the 4096-voxel grid");
+            if (!root_entries.insert(origin).second) throw VdbCorrupt("two root entries at one origin");
+            return origin;
+        };
         for (uint32_t t = 0; t < tiles; ++t) {
             const auto origin = read_root_origin();
             const float value = in_.read<float>();
             const bool active = in_.read<uint8_t>() != 0;
-            if (root_children.count(origin) || !root_tiles_.insert(origin).second)
-                throw VdbCorrupt("two root entries at one origin");
             keep_tile(origin, RootChildSize, value, active);
         }
         for (uint32_t c = 0; c < children; ++c) {
             const auto origin = read_root_origin();
-            if (root_tiles_.count(origin) || root_children.count(origin))
-                throw VdbCorrupt("two root entries at one origin");
             const size_t first = tree_.leaves.size();
             read_node_topology(Upper, origin);
             root_children[origin] = {first, tree_.leaves.size()};
@@ -204,14 +204,6 @@ class TreeReader {
     }
 
   private:
-    std::array<int32_t, 3> read_root_origin() {
-        std::array<int32_t, 3> origin;
-        in_.read(origin.data(), 12);
-        for (int32_t c : origin)
-            if (c % RootChildSize != 0) throw VdbCorrupt("a root entry's origin off the 4096-voxel grid");
-        return origin;
-    }
-
     void keep_tile(const std::array<int32_t, 3>& origin, int32_t size, float value, bool active) {
         if (!active && std::memcmp(&value, &tree_.background, sizeof(float)) == 0) return;
         if (budget_.tiles == 0)
@@ -225,7 +217,8 @@ class TreeReader {
     void read_node_topology(const NodeLevel& level, const std::array<int32_t, 3>& origin) {
         const auto child_mask = read_mask(in_, level.words());
         const auto value_mask = read_mask(in_, level.words());
-        const auto values = read_node_values(in_, codec_, level, value_mask.data(), tree_.background);
+        std::vector<float> values(size_t(level.slots()), 0.f);
+        read_node_values(in_, codec_, level, value_mask.data(), tree_.background, values.data());
         for (int n = 0; n < level.slots(); ++n)
             if (!bit(child_mask.data(), n))
                 keep_tile(slot_origin(origin, level, n), 1 << level.child_log2, values[size_t(n)],
@@ -250,15 +243,13 @@ class TreeReader {
     // LeafNode::readBuffers: the value mask (which stands), then the voxel values.
     void read_leaf_buffer(VdbLeaf& leaf) {
         in_.read(leaf.active.data(), 64);
-        const auto values = read_node_values(in_, codec_, Leaf, leaf.active.data(), tree_.background);
-        std::copy(values.begin(), values.end(), leaf.values.begin());
+        read_node_values(in_, codec_, Leaf, leaf.active.data(), tree_.background, leaf.values.data());
     }
 
     VdbInput& in_;
     const VdbValueCodec& codec_;
     VdbBudget& budget_;
     VdbFloatTree tree_;
-    std::set<std::array<int32_t, 3>> root_tiles_;
 };
 
 } // namespace
