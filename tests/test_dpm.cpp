@@ -238,24 +238,46 @@ INSTANTIATE_TEST_SUITE_P(
                     StoredCase{"slab", "slab_top.deform@0.15,2.2,-0.1=0,1,0", "slab_bulge", 32, 8}),
     [](const testing::TestParamInfo<StoredCase>& info) { return info.param.reference; });
 
-TEST(DpmC, ReverseModeEqualsForwardMode) {
-    auto scene = load_scene_string(scene_xml(mirror, above));
-    Parameters params(*scene);
-    params.enable({parse_param_selection("mirror.rotate=0,0,1")});
+namespace {
+
+// DPM-C at a few samples in forward mode and in reverse mode (against a fixed adjoint image a): checks
+// <a, J d> = <J^T a, d> and returns both passes.
+struct ForwardAndReverse {
+    DerivativeImage forward;
+    Gradient reverse;
+};
+
+ForwardAndReverse expect_reverse_equals_forward(const Scene& scene, const Parameters& params) {
     DpmOptions o;
     o.spp = 4;
     o.pixel_fraction = 0.5;
     o.paths = 2;
-    const DerivativeImage d = dpm_derivative(*scene, params, o).image;
+    ForwardAndReverse r{dpm_derivative(scene, params, o).image, {}};
     Image adjoint(16, 16);
     for (size_t i = 0; i < adjoint.pixels.size(); ++i)
         adjoint.pixels[i] = Color3f(float(i % 7) - 3.f, 1.f, float(i % 3));
-    const Gradient g = dpm_gradient(*scene, params, adjoint, o);
-    const AdjointPair p = adjoint_pair(adjoint, d.derivative, g.values, params.direction());
+    r.reverse = dpm_gradient(scene, params, adjoint, o);
+    if (r.reverse.values.size() != size_t(params.dimension())) {
+        ADD_FAILURE() << "the gradient has " << r.reverse.values.size() << " values for " << params.dimension()
+                      << " parameters";
+        return r;
+    }
+    const AdjointPair p = adjoint_pair(adjoint, r.forward.derivative, r.reverse.values, params.direction());
     EXPECT_GT(p.scale, 0.0);
     EXPECT_NEAR(p.forward, p.reverse, 1e-4 * p.scale);
+    return r;
+}
+
+} // namespace
+
+TEST(DpmC, ReverseModeEqualsForwardMode) {
+    auto scene = load_scene_string(scene_xml(mirror, above));
+    Parameters params(*scene);
+    params.enable({parse_param_selection("mirror.rotate=0,0,1")});
+    const ForwardAndReverse r = expect_reverse_equals_forward(*scene, params);
     // Both passes render the same SPPM image.
-    for (size_t i = 0; i < d.primal.pixels.size(); ++i) EXPECT_EQ(d.primal.pixels[i], g.primal.pixels[i]);
+    for (size_t i = 0; i < r.forward.primal.pixels.size(); ++i)
+        EXPECT_EQ(r.forward.primal.pixels[i], r.reverse.primal.pixels[i]);
 }
 
 // Under vertex_positions a mesh's smooth normals are tape leaves chained to the positions once per pass
@@ -287,19 +309,7 @@ TEST(DpmC, ReverseModeEqualsForwardModeUnderVertexPositions) {
     for (float& x : d) x = 0.2f * (rng.next_float() - 0.5f);
     params.enable({{"mirror.vertex_positions", d}});
     ASSERT_GT(params.tape_dimension(), params.dimension()) << "the bowl's normals should be tape leaves";
-    DpmOptions o;
-    o.spp = 4;
-    o.pixel_fraction = 0.5;
-    o.paths = 2;
-    const DerivativeImage fwd = dpm_derivative(*scene, params, o).image;
-    Image adjoint(16, 16);
-    for (size_t i = 0; i < adjoint.pixels.size(); ++i)
-        adjoint.pixels[i] = Color3f(float(i % 7) - 3.f, 1.f, float(i % 3));
-    const Gradient g = dpm_gradient(*scene, params, adjoint, o);
-    ASSERT_EQ(g.values.size(), size_t(params.dimension()));
-    const AdjointPair p = adjoint_pair(adjoint, fwd.derivative, g.values, params.direction());
-    EXPECT_GT(p.scale, 0.0);
-    EXPECT_NEAR(p.forward, p.reverse, 1e-4 * p.scale);
+    expect_reverse_equals_forward(*scene, params);
 }
 
 TEST(DpmC, SameResultWhateverTheThreadCount) {
