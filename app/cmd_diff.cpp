@@ -2,10 +2,10 @@
 #include "cli.h"
 
 #include "core/atomic_file.h"
-#include "diff/budget.h"
 #include "diff/finite_difference.h"
-#include "diff/interior.h"
 #include "diff/method.h"
+#include "diff/psdr/budget.h"
+#include "diff/psdr/interior.h"
 #include "scene/scene.h"
 
 #include <nlohmann/json.hpp>

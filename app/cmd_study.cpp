@@ -1,15 +1,15 @@
 // `penumbra variance-study | sampling-demo`: the equal-time benchmarks of the path sampling methods (paper 002
-// §5.2 and §5.3; src/diff/variance_study.h, src/optim/sampling_race.h); `penumbra equal-time`: variance × time of
-// derivative methods (paper 001 §7: psdr against a DTRT-like baseline; src/diff/equal_time.h).
+// §5.2 and §5.3; src/studies/variance_study.h, src/studies/sampling_race.h); `penumbra equal-time`: variance × time of
+// derivative methods (paper 001 §7: psdr against a DTRT-like baseline; src/studies/equal_time.h).
 #include "cli.h"
 
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "diff/equal_time.h"
 #include "diff/parameters.h"
-#include "diff/variance_study.h"
-#include "optim/sampling_race.h"
 #include "scene/scene.h"
+#include "studies/equal_time.h"
+#include "studies/sampling_race.h"
+#include "studies/variance_study.h"
 
 #include <cstdio>
 

@@ -1,4 +1,4 @@
-// `penumbra ad-suite`: psdr's derivatives on the Mitsuba differentiable-rendering test suite (diff/ad_suite.h,
+// `penumbra ad-suite`: psdr's derivatives on the Mitsuba differentiable-rendering test suite (studies/ad_suite.h,
 // scenes/mitsuba_ad/suite.json) against finite-difference references kept in a cache directory: per scene relerr,
 // relerr4, the reference's own noise, the z-score of the image mean and the times, as a markdown table.
 #include "cli.h"
@@ -6,8 +6,8 @@
 #include "core/atomic_file.h"
 #include "core/colormap.h"
 #include "core/error.h"
-#include "diff/ad_suite.h"
 #include "scene/scene.h"
+#include "studies/ad_suite.h"
 
 #include <nlohmann/json.hpp>
 

@@ -13,8 +13,8 @@
 #include "core/distribution.h"
 #include "core/rng.h"
 #include "core/warp.h"
-#include "diff/interior.h"
-#include "diff/psdr.h"
+#include "diff/psdr/interior.h"
+#include "diff/psdr/psdr.h"
 #include "render/render.h"
 #include "scene/scene.h"
 

@@ -1,4 +1,4 @@
-// Entropic optimal transport of the DPM-G matching loss (optim/sinkhorn.h) at the paper's size: all pixels of
+// Entropic optimal transport of the DPM-G matching loss (core/sinkhorn.h) at the paper's size: all pixels of
 // an N x N rendering matched to all pixels of an N x N target as 5-D points (RGB + xy), blur 0.01.
 //  - BM_SinkhornIteration/N/threads: one Sinkhorn iteration and the matching at ε = blur² (three passes over
 //    the N⁴ costs);
@@ -8,7 +8,7 @@
 // recoloured in the target), so the numbers compare with POT's there.
 //
 // Usage: build/penumbra_bench_sinkhorn [--benchmark_filter=...]
-#include "optim/sinkhorn.h"
+#include "core/sinkhorn.h"
 
 #include <benchmark/benchmark.h>
 #include <tbb/task_arena.h>

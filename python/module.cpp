@@ -5,9 +5,9 @@
 // penumbra.Error with penumbra's message (file:line for scene files).
 #include "core/interrupt.h"
 #include "core/progress.h"
+#include "core/sinkhorn.h"
 #include "diff/method.h"
 #include "diff/parameter_table.h"
-#include "optim/sinkhorn.h"
 #include "render/render.h"
 #include "scene/scene.h"
 
@@ -325,7 +325,7 @@ PYBIND11_MODULE(_penumbra, m) {
             write_image(path, from_array(a, int(a.shape(1)), int(a.shape(0)), "write_image"));
         },
         py::arg("path"), py::arg("image"));
-    // Entropic optimal transport on 5-D points (optim/sinkhorn.h); `plan` adds the dense n x m plan.
+    // Entropic optimal transport on 5-D points (core/sinkhorn.h); `plan` adds the dense n x m plan.
     m.def(
         "sinkhorn",
         [](const Points5& x, const Eigen::VectorXd& a, const Points5& y, const Eigen::VectorXd& b, double blur,

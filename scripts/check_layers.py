@@ -19,11 +19,7 @@ RANK = {"src/core": 0, "src/scene": 1, "src/render": 2, "src/diff": 3, "src/opti
         "app": 6, "python": 6}
 # Method folders of src/diff that build on another method folder's pieces.
 METHOD_USES = {
-    "psdr": {"interior"},
-    "war": {"interior"},
-    "was": {"interior"},
-    "paths": {"interior"},
-    "dpm": {"interior"},
+    "war": {"was"},  # paper 000 warps with paper 004's boundary test, warp field and auxiliary rays
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s*"([^"]+)"')
 SOURCE = (".h", ".hpp", ".cpp", ".cc")

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""penumbra's Sinkhorn (src/optim/sinkhorn.h) against POT (Debian's python3-pot) on the DPM-G matching problem:
+"""penumbra's Sinkhorn (src/core/sinkhorn.h) against POT (Debian's python3-pot) on the DPM-G matching problem:
 all pixels of an N x N rendering matched to all pixels of an N x N target as 5-D points (RGB + xy), with the
 cost C = 1/2 |x - y|^2 and eps = blur^2 (the images of bench/bench_sinkhorn.cpp).
 

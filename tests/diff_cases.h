@@ -6,9 +6,9 @@
 // thread counts, errors naming the way out), and for the paper suites (scenes/war, scenes/was) the method
 // table and the check of one scene against its finite differences.
 #pragma once
-#include "diff/ad_suite.h"
 #include "diff/method.h"
 #include "diff_check.h"
+#include "studies/ad_suite.h"
 
 #include <gtest/gtest.h>
 
@@ -41,8 +41,8 @@ struct ValidationCase {
 };
 
 // The boundary validation scenes with the lights the warped-area methods see (area lights and the
-// environment; the shadows of point and directional lights are outside them, diff/war.h,
-// diff/warped_area.h), steps as the psdr tests' (tests/test_diff_boundary.cpp); the camera motion with a
+// environment; the shadows of point and directional lights are outside them, diff/war/war.h,
+// diff/was/warped_area.h), steps as the psdr tests' (tests/test_diff_boundary.cpp); the camera motion with a
 // Gaussian filter (cut at the film's edge) and with a box filter (jumps at every pixel edge).
 inline const std::vector<ValidationCase>& validation_cases() {
     static const std::vector<ValidationCase> cases = {
@@ -91,7 +91,7 @@ inline LoadedCase load_validation(const ValidationCase& c, int res) {
 }
 
 // The finite-difference references of the validation cases that tests/test_diff_war.cpp stores
-// (diff/ad_suite.h's cache): their seed and the case's key.
+// (studies/ad_suite.h's cache): their seed and the case's key.
 inline const std::string war_reference_cache = validation_dir + "war_fd";
 constexpr uint64_t WarReferenceSeed = 99;
 

@@ -12,7 +12,7 @@
 //    where noise averages out and a bias does not.
 #pragma once
 #include "diff/finite_difference.h"
-#include "diff/interior.h"
+#include "diff/psdr/interior.h"
 
 #include <gtest/gtest.h>
 

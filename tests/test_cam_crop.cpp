@@ -2,7 +2,7 @@
 // the full frame at the offset, for the sensors' ray geometry, the renderer, the light tracer and the
 // derivative terms.
 #include "core/rng.h"
-#include "diff/psdr.h"
+#include "diff/psdr/psdr.h"
 #include "diff_check.h"
 #include "render_stats.h"
 #include "scene/factory.h"

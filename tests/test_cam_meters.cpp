@@ -1,7 +1,7 @@
 // The radiancemeter sensor (Mitsuba: one ray from `origin` along `direction`, or from to_world's origin along
 // its +z): analytic readings, its parameters and errors, and its interior derivative.
-#include "diff/interior.h"
-#include "diff/psdr.h"
+#include "diff/psdr/interior.h"
+#include "diff/psdr/psdr.h"
 #include "render/render.h"
 #include "render_stats.h"
 #include "scene/scene.h"

@@ -3,7 +3,7 @@
 // (the plane in focus renders as with a pinhole; a point out of focus spreads over the thin-lens circle of
 // confusion), light tracing against path tracing with a finite aperture, the interior derivative against
 // finite differences, and the boundary terms' refusal of a finite aperture.
-#include "diff/psdr.h"
+#include "diff/psdr/psdr.h"
 #include "diff_check.h"
 #include "render_stats.h"
 #include "scene/factory.h"

@@ -1,4 +1,4 @@
-// The bidirectional estimator of the interior term (paper 001 §7; src/diff/bdpt_interior.h) against central
+// The bidirectional estimator of the interior term (paper 001 §7; src/diff/psdr/bdpt_interior.h) against central
 // finite differences of the bdpt renderer: a point light in or above a fog-filled box (homogeneous, or a
 // heterogeneous grid) over a floor, with and without a rough-glass sphere (a caustic that only light subpaths
 // find from a point light); derivatives w.r.t. σt, the albedo, the HG g, a grid's scale, a surface

@@ -1,8 +1,8 @@
 // Boundary terms of the differential path integral (paper 001 Eq. 19) against finite differences on the
 // validation scenes of scenes/validation/: interior + boundary must match, interior alone must visibly miss.
 #include "core/warp.h"
-#include "diff/boundary_segment.h"
-#include "diff/psdr.h"
+#include "diff/psdr/boundary_segment.h"
+#include "diff/psdr/psdr.h"
 #include "diff_check.h"
 
 #include <gtest/gtest.h>

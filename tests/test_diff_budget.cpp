@@ -1,6 +1,6 @@
-// The calibrated split of one sample budget over psdr's terms (diff/budget.h): it spends the budget where the
+// The calibrated split of one sample budget over psdr's terms (diff/psdr/budget.h): it spends the budget where the
 // variance is, beating the equal split at equal cost, and stays reproducible per seed.
-#include "diff/budget.h"
+#include "diff/psdr/budget.h"
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 // the connections from medium vertices near the light keep their length and the derivative of I/ℓ² has
 // finite variance. psdr's derivative (interior + direct and pixel boundary terms; material-form first vertex,
 // so that the medium vertices the camera sees follow X too) matches central finite differences.
-#include "diff/psdr.h"
+#include "diff/psdr/psdr.h"
 #include "diff_check.h"
 #include "render/render.h"
 

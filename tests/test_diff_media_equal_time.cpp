@@ -1,9 +1,9 @@
-// The equal-time study of derivative methods (diff/equal_time.h, `penumbra equal-time`) at a reduced size:
+// The equal-time study of derivative methods (studies/equal_time.h, `penumbra equal-time`) at a reduced size:
 // the method specifications, the rows, and that variance × time does not depend on the sample count (the
 // premise of comparing methods by it). The measured ratios are in docs/differentiable-media.md.
 #include "core/error.h"
-#include "diff/equal_time.h"
 #include "scene/scene.h"
+#include "studies/equal_time.h"
 
 #include <gtest/gtest.h>
 

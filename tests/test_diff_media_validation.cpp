@@ -10,11 +10,11 @@
 // first term of the same run) must fail the same check: the boundary terms carry visible signal. `penumbra
 // ad-suite --manifest scenes/validation/media_suite.json --cache scenes/validation/media_fd` reports the
 // same.
-#include "diff/ad_suite.h"
 #include "diff/method.h"
-#include "diff/psdr.h"
+#include "diff/psdr/psdr.h"
 #include "diff_cases.h"
 #include "diff_check.h"
+#include "studies/ad_suite.h"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 // with and without next-event estimation, for GGX and Beckmann roughness and a blend weight, on a scene with
 // interreflection (a glossy floor facing a diffuse wall); adaptive pixel sampling of the loss gradient; forward
 // against reverse mode; determinism across thread counts; a negative control; rejected parameters.
-#include "diff/path_sampling.h"
+#include "diff/paths/path_sampling.h"
 #include "diff_check.h"
 #include "render_stats.h"
 

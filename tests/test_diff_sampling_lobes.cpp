@@ -2,7 +2,7 @@
 // density (GGX and Beckmann roughness after Zeltner et al. 2021, blend weight), and the sign of each component
 // against ∂D/∂α evaluated with Var (the one physics code path).
 #include "bsdf_chi2.h"
-#include "diff/differential_vertex.h"
+#include "diff/paths/differential_vertex.h"
 #include "scene/bsdfs/bsdfs.h"
 
 #include <gtest/gtest.h>

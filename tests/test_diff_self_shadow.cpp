@@ -1,7 +1,7 @@
 // Validation scene (d) of the boundary terms (paper 001 Eq. 19): a vertex-position perturbation of a closed,
 // concave mesh with self-shadowing (scenes/validation/self_shadow.xml). Interior + boundary terms must match
 // central finite differences; the interior term alone must visibly miss the silhouettes and the moving shadow.
-#include "diff/psdr.h"
+#include "diff/psdr/psdr.h"
 #include "diff_check.h"
 
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
 // vertex_positions of meshes shaded with smooth vertex normals: as in Mitsuba 3 (Mesh::parameters_changed),
 // the normals are recomputed whenever the positions change, and the derivative estimators differentiate them
 // through the positions (diff/material_form.h, MovedVertices::normal).
-#include "diff/psdr.h"
+#include "diff/psdr/psdr.h"
 #include "diff/vertex_normals.h"
 #include "diff_check.h"
 #include "xml_test_util.h"
@@ -68,7 +68,7 @@ std::vector<float> height_field_direction(const Parameter& positions) {
 
 // A quad filling the view (its edges out of the film), with vertex normals given in the file that turn its
 // left side away from the camera: the shading terminator, where a diffuse BSDF's cos θ_i > 0 test makes the
-// radiance jump to black, runs down the middle of the image (diff/shading_terminator.h). A constant sky
+// radiance jump to black, runs down the middle of the image (diff/psdr/shading_terminator.h). A constant sky
 // lights it; nothing casts a shadow.
 std::string terminator_scene(const std::string& mesh) {
     return R"(<scene version="3.0.0">

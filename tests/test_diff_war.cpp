@@ -1,10 +1,10 @@
-// Warped-area reparameterization in material path space (paper 000, diff/war.h, method `war`): the boundary
+// Warped-area reparameterization in material path space (paper 000, diff/war/war.h, method `war`): the boundary
 // validation scenes of scenes/validation/ against central finite differences, agreement with psdr, reverse
 // mode against forward mode, determinism across thread counts, and the errors for what the method does not
-// do. The finite-difference references are stored in scenes/validation/war_fd (diff/ad_suite.h's cache;
+// do. The finite-difference references are stored in scenes/validation/war_fd (studies/ad_suite.h's cache;
 // computed here, slowly, when a scene file changed since: delete the stale files and rerun to store new
 // ones).
-#include "diff/war.h"
+#include "diff/war/war.h"
 #include "diff_cases.h"
 
 #include <gtest/gtest.h>

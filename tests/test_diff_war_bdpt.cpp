@@ -1,4 +1,4 @@
-// The bidirectional estimator of warped-area reparameterization (paper 000 §5.2.2, diff/war_bdpt.h, method
+// The bidirectional estimator of warped-area reparameterization (paper 000 §5.2.2, diff/war/war_bdpt.h, method
 // `war-bdpt`): boundary validation scenes of scenes/validation/ against the central finite differences
 // tests/test_diff_war.cpp stored in scenes/validation/war_fd, reverse mode against forward mode, determinism
 // across thread counts, and the errors for what the method does not do.

@@ -1,8 +1,8 @@
-// Warped-area sampling (paper 004, diff/warped_area.h, method `was`): the boundary validation scenes of
+// Warped-area sampling (paper 004, diff/was/warped_area.h, method `was`): the boundary validation scenes of
 // scenes/validation/ against central finite differences (both variants), agreement with psdr, reverse mode
 // against forward mode, determinism, the variance reduction of the control variate and of antithetic
 // auxiliary samples on the paper's flat-emitter example, and the errors for what the method does not do.
-#include "diff/warped_area.h"
+#include "diff/was/warped_area.h"
 #include "diff_cases.h"
 
 #include <gtest/gtest.h>
@@ -14,7 +14,7 @@ namespace {
 
 // The validation cases at 16 × 16 with 1024 samples per pixel (16 batches of 64: the estimator's tails are
 // heavy, and batches of a few samples understate its standard errors); the camera motion with a box filter
-// takes the pixel-edge term (diff/warped_area.h).
+// takes the pixel-edge term (diff/was/warped_area.h).
 const std::vector<ValidationCase>& cases = validation_cases();
 
 constexpr int Spp = 1024;

@@ -1,4 +1,4 @@
-// Differentiable photon mapping (paper 003, diff/dpm.h): DPM-C's derivative images against central finite
+// Differentiable photon mapping (paper 003, diff/dpm/dpm.h): DPM-C's derivative images against central finite
 // differences of SPPM renders at a fixed radius (alpha 1, the smooth kernel) with common random numbers, on
 // caustics only photon mapping renders: a spot light refracted twice by a rotating glass block, and paper 003's
 // Fig. 6 (a curved mirror) and a bumpy glass slab against stored references, each onto a diffuse floor the
@@ -7,7 +7,7 @@
 // determinism across thread counts, errors.
 #include "core/error.h"
 #include "core/image.h"
-#include "diff/dpm.h"
+#include "diff/dpm/dpm.h"
 #include "diff/method.h"
 #include "diff_cases.h"
 #include "diff_check.h"

@@ -1,6 +1,6 @@
 // The DPM inverse-rendering demos (scenes/dpm/egg, scenes/dpm/wine; docs/dpm-demos.md) at a reduced size:
 // each bundled configuration must recover its parameter from a wrong start.
-#include "diff/dpm.h"
+#include "diff/dpm/dpm.h"
 #include "diff/method.h"
 #include "diff_cases.h"
 #include "optim/optimize.h"

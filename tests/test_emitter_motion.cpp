@@ -2,7 +2,7 @@
 // the interior term's next-event segments see the moving light (its position, direction, cone or
 // environment), the direct boundary term the shadows it moves.
 #include "core/rng.h"
-#include "diff/psdr.h"
+#include "diff/psdr/psdr.h"
 #include "diff_check.h"
 #include "xml_test_util.h"
 

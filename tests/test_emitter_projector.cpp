@@ -2,7 +2,7 @@
 // w.r.t. their parameters and an occluder in their light against finite differences, and the refusal of
 // motions that the frustum's border crosses.
 #include "core/image.h"
-#include "diff/psdr.h"
+#include "diff/psdr/psdr.h"
 #include "diff_check.h"
 #include "render/render.h"
 #include "scene/emitter.h"

@@ -1,12 +1,12 @@
-// Extended path space manifolds (paper 003 §3.1, diff/epsm.h): the geometric derivatives of Eq. 2 for each
+// Extended path space manifolds (paper 003 §3.1, diff/dpm/epsm.h): the geometric derivatives of Eq. 2 for each
 // constraint type against central differences of the same paths re-solved in closed form (double precision)
 // under the moved geometry: a rotating or translating mirror seen along a fixed eye ray (fixed direction +
 // half vector), a rotating glass slab refracting it twice (η and 1/η), the mirror point connecting the eye to a
 // fixed floor point (the fixed-density EPSM of DPM-G), and a photon reflected onto the floor followed by its
 // density-estimation vertex (vertex merging, Eq. 24). Reverse mode must equal forward mode.
 #include "core/error.h"
+#include "diff/dpm/epsm.h"
 #include "diff/vertex_normals.h"
-#include "diff/epsm.h"
 #include "scene/scene.h"
 
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
 // hdrfilm options (pixel_format, component_format, sample_border, banner) and the `moment` integrator.
 #include "core/image.h"
 #include "diff/parameters.h"
-#include "diff/psdr.h"
+#include "diff/psdr/psdr.h"
 #include "diff_check.h"
 #include "render/film_output.h"
 #include "render/integrator.h"

@@ -2,8 +2,8 @@
 // returns exactly what its estimator returns for the same options and seed (forward and reverse mode), so the
 // CLI and the Python module, which only go through the front, differentiate like the estimators' own tests.
 #include "diff/method.h"
-#include "diff/path_sampling.h"
-#include "diff/psdr.h"
+#include "diff/paths/path_sampling.h"
+#include "diff/psdr/psdr.h"
 #include "scene/scene.h"
 
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
-// The Mitsuba differentiable-rendering test suite (scenes/mitsuba_ad/suite.json, diff/ad_suite.h) at each scene's
+// The Mitsuba differentiable-rendering test suite (scenes/mitsuba_ad/suite.json, studies/ad_suite.h) at each scene's
 // reduced CI resolution: psdr's derivative at Mitsuba's sample count, split by psdr_budget, against central
 // differences computed here. `penumbra ad-suite` measures the same at 128².
-#include "diff/ad_suite.h"
+#include "studies/ad_suite.h"
 
 #include <gtest/gtest.h>
 

@@ -1,10 +1,10 @@
 // Building blocks of inverse rendering: losses (gradient check against finite differences), Adam (a
 // quadratic), the configuration parser's errors and the line-plot writer.
 #include "core/error.h"
+#include "core/image_loss.h"
 #include "core/plot.h"
 #include "core/rng.h"
 #include "optim/adam.h"
-#include "optim/loss.h"
 #include "optim/optimize.h"
 
 #include <nlohmann/json.hpp>

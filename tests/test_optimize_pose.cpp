@@ -1,8 +1,8 @@
 // Pose optimization (issue 4 item 9): rotation maps, multi-axis motions, the pose gradient against finite
 // differences of the loss, configuration errors, and the bundled demo (scenes/pose) converging.
 #include "core/error.h"
-#include "diff/psdr.h"
-#include "optim/loss.h"
+#include "core/image_loss.h"
+#include "diff/psdr/psdr.h"
 #include "optim/optimize.h"
 #include "render/render.h"
 

@@ -6,7 +6,7 @@
 #include "core/image.h"
 #include "core/rng.h"
 #include "diff/parameter_table.h"
-#include "diff/psdr.h"
+#include "diff/psdr/psdr.h"
 #include "diff_check.h"
 #include "scene/scene.h"
 #include "xml_test_util.h"

@@ -3,8 +3,8 @@
 // writes its CSV and plot; bad inputs are clear Errors. (The measured ratios come from the benchmark runs in
 // docs/variance_study.md, not from here.)
 #include "core/error.h"
-#include "diff/variance_study.h"
-#include "optim/sampling_race.h"
+#include "studies/sampling_race.h"
+#include "studies/variance_study.h"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // linearcurve / bsplinecurve: the curve file format, Mitsuba's uv convention and the silhouette of straight
 // curves seen from the side (2 r L, plus pi r^2 for the end caps of a linear curve).
 #include "diff/parameters.h"
-#include "diff/psdr.h"
+#include "diff/psdr/psdr.h"
 #include "diff_check.h"
 #include "scene/scene.h"
 

@@ -2,7 +2,7 @@
 // of a cylinder area emitter.
 #include "diff/edges.h"
 #include "diff/parameters.h"
-#include "diff/psdr.h"
+#include "diff/psdr/psdr.h"
 #include "scene/emitter.h"
 #include "scene/factory.h"
 #include "scene/shape.h"

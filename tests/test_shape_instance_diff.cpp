@@ -1,7 +1,7 @@
 // Derivatives of instanced scenes: Parameters flattens the instances into world-space shapes. The flattened
 // scene renders as the instanced one, an instance's motion and a group shape's shared vertex_positions match
 // central finite differences (psdr: interior + primary boundary), and `penumbra params` lists them.
-#include "diff/psdr.h"
+#include "diff/psdr/psdr.h"
 #include "diff_check.h"
 #include "scene/scene.h"
 #include "xml_test_util.h"

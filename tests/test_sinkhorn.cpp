@@ -1,9 +1,9 @@
-// Entropic optimal transport (optim/sinkhorn.h) and the DPM-G matching loss (optim/matching_loss.h, paper 003
+// Entropic optimal transport (core/sinkhorn.h) and the DPM-G matching loss (diff/dpm/matching_loss.h, paper 003
 // Eq. 25). The references are exact: a translated or permuted cloud has a unique optimal assignment whose
 // cost gap to any other is far above ε, so the entropic plan is that assignment up to exp(−gap/ε) ≈ 0.
 #include "core/error.h"
-#include "optim/matching_loss.h"
-#include "optim/sinkhorn.h"
+#include "core/sinkhorn.h"
+#include "diff/dpm/matching_loss.h"
 
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>

@@ -1,7 +1,7 @@
-// The velocity field of warped-area reparameterization in material path space (diff/war_field.h, paper 000
+// The velocity field of warped-area reparameterization in material path space (diff/war/velocity_field.h, paper 000
 // Algorithm 1) on synthetic auxiliary samples: the weight's gradient against central differences, a uniform
 // discontinuity velocity reproduced exactly with zero divergence, and the divergence of a linear field.
-#include "diff/war_field.h"
+#include "diff/war/velocity_field.h"
 
 #include <gtest/gtest.h>
 

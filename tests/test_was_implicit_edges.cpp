@@ -1,10 +1,10 @@
-// Implicit edges in the boundary test of warped-area sampling (paper 004 §5.5, diff/implicit_edges.h): the
+// Implicit edges in the boundary test of warped-area sampling (paper 004 §5.5, diff/was/implicit_edges.h): the
 // triangle–triangle segments and the broad phase against brute force, a cube sunk halfway into a floor (the
 // square intersection curve, B next to it and far from it), the warp at the curve with and without implicit
 // edges, and the construction time on the 220k-triangle hedge.
 #include "core/rng.h"
 #include "diff/vertex_normals.h"
-#include "diff/auxiliary_rays.h"
+#include "diff/was/auxiliary_rays.h"
 #include "mesh_test_util.h"
 
 #include <gtest/gtest.h>

@@ -5,11 +5,11 @@
 // quadrature of the boundary flux; the estimator ∂θL + ∇·(L V) (Algorithm 1) must match it, and without ∇·V
 // it must not.
 #include "core/rng.h"
-#include "diff/auxiliary_rays.h"
-#include "diff/control_variate.h"
 #include "diff/film_sample.h"
-#include "scene/scene.h"
+#include "diff/was/auxiliary_rays.h"
+#include "diff/was/control_variate.h"
 #include "mesh_test_util.h"
+#include "scene/scene.h"
 
 #include <gtest/gtest.h>
 

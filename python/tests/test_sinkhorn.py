@@ -1,4 +1,4 @@
-"""penumbra's entropic optimal transport (src/optim/sinkhorn.h) against POT's log-domain Sinkhorn on a small
+"""penumbra's entropic optimal transport (src/core/sinkhorn.h) against POT's log-domain Sinkhorn on a small
 5-D problem at the same eps: both converged, the plans and the barycentric matches agree to the float precision
 of penumbra's exponentials (measured: plan L1 difference 1e-7 at 16^2, docs/losses.md)."""
 import numpy as np

@@ -1,5 +1,5 @@
 // The random numbers of the auxiliary samples of one camera sample (warped-area sampling's auxiliary rays,
-// diff/warped_area.h; warped-area reparameterization's auxiliary points, diff/war_field.h): a PCG stream of
+// diff/was/warped_area.h; warped-area reparameterization's auxiliary points, diff/war/velocity_field.h): a PCG stream of
 // their own per (seed, pixel, sample), so that the unbiased estimators' random sample counts do not shift the
 // path sampler's dimensions (and a path is the same with and without warping).
 #pragma once

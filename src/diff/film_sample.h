@@ -1,6 +1,6 @@
 // The film position of a material-form or warped camera sample: a defensive mixture of the normalized
-// reconstruction filter and the uniform density on its support square (diff/interior.cpp,
-// diff/warped_area.cpp).
+// reconstruction filter and the uniform density on its support square (diff/psdr/interior.cpp,
+// diff/was/warped_area.cpp).
 #pragma once
 #include "scene/film.h"
 #include "scene/sampler.h"

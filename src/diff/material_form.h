@@ -72,7 +72,7 @@ private:
 
 // X(·, θ) for every shape and the camera.
 // Motions of the camera and of point-like lights, which depend on the enabled parameters only (MaterialForm and
-// diff/epsm.h use them).
+// diff/dpm/epsm.h use them).
 // The camera's center of projection as it moves.
 inline Vec3<Var> camera_position(const Parameters& params, const Vec3f& camera) {
     Vec3<Var> y(camera);

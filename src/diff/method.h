@@ -9,8 +9,8 @@
 // value` flags (bool options: `--name`) and as Python keyword arguments (`-` spelled `_`).
 #pragma once
 #include "core/image.h"
+#include "core/image_loss.h"
 #include "diff/parameters.h"
-#include "optim/loss.h"
 
 #include <cstdint>
 #include <functional>

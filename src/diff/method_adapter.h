@@ -1,8 +1,9 @@
 // What the adapters of the estimators behind the common front of diff/method.h (diff/*_method.cpp) share: an
 // estimator's options for one run, and its results in the front's form.
 #pragma once
-#include "diff/interior.h"
 #include "diff/method.h"
+#include "diff/result.h"
+#include "render/integrator_settings.h"
 
 #include <algorithm>
 

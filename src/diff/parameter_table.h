@@ -7,11 +7,11 @@
 //   <sensor>.translate / .rotate, <emitter>.translate / .rotate   the same about their reference position
 //                                   (no scale; directional lights and envmaps rotate only)
 // Derivatives are taken by Parameters' motions at the current pose (paper 001 §4.1): a change dt is the
-// translate motion; dr is the rotation ω = J_l(r) dr (optim/pose.h) about the current center c0 + t; ds is
+// translate motion; dr is the rotation ω = J_l(r) dr (diff/pose.h) about the current center c0 + t; ds is
 // the scale motion about c0 + t by ds / (1 + s). So dL/dt = g_t, dL/dr = J_l(r)ᵀ g_ω, dL/ds = g_s / (1 + s).
 #pragma once
 #include "diff/parameters.h"
-#include "optim/pose.h"
+#include "diff/pose.h"
 
 #include <map>
 #include <memory>

@@ -10,7 +10,7 @@
 // the same offsets and random numbers on a pixel's opposite edges; each interior edge point contributes to
 // the two pixels it separates. In participating media the material point seen at s is where a free flight along
 // the camera ray ends (diff/media_radiance.h): a medium vertex, moving by the volume motion, or a surface.
-// Warped-area sampling (diff/warped_area.h) takes the same term with the warp field V(s) in place of ṡ: the
+// Warped-area sampling (diff/was/warped_area.h) takes the same term with the warp field V(s) in place of ṡ: the
 // divergence theorem on the film leaves −∮ L (V · n_out) over the edges where the filter (or the film) ends.
 #pragma once
 #include "core/image.h"

@@ -4,6 +4,7 @@
 #include "core/interrupt.h"
 #include "core/seconds.h"
 #include "diff/vertex_normals.h"
+#include "render/light_medium.h"
 #include "render/tiles.h"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -144,6 +145,19 @@ BoundaryOptions film_edge_options(const PixelLoop& loop, uint64_t seed, SampleCo
 void require_film(const Scene& scene, const Parameters& params) {
     if (params.dimension() == 0) throw Error("no parameter is enabled for differentiation");
     if (!scene.sensor || !scene.sensor->film) throw Error("the scene has no sensor");
+}
+
+void check_adjoint_size(const Film& film, const Image& adjoint) {
+    if (adjoint.width != film.width || adjoint.height != film.height)
+        throw Error("gradient: the adjoint image is " + std::to_string(adjoint.width) + "x" +
+                    std::to_string(adjoint.height) + ", the film " + std::to_string(film.width) + "x" +
+                    std::to_string(film.height));
+}
+
+void require_no_media(const Scene& scene) {
+    if (scene_has_media(scene))
+        throw Error("the scene has participating media, which this method does not differentiate: use the psdr "
+                    "method (the default)");
 }
 
 TileSamplesFactory per_sample(SampleFunction f) {

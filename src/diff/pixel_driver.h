@@ -1,12 +1,13 @@
 // The per-pixel sample loops of the estimators that integrate the image derivative over camera samples (the
-// interior term of diff/interior.h; war, war-bdpt and was): forward mode in independent batches with
+// interior term of diff/psdr/interior.h; war, war-bdpt and was): forward mode in independent batches with
 // per-pixel standard errors, reverse mode's adjoint pass dL/dθ = Σ_pixels ∂L/∂I · dI/dθ, the flux across the
 // film's edges that a warped estimator adds per batch (diff/pixel_boundary.h), and the warning for the
 // shadows of delta lights that a warp does not see. An estimator supplies its per-sample function only.
 // Random numbers depend on (seed, pixel, sample) alone: neither tiles nor threads change a result.
 #pragma once
-#include "diff/interior.h"
 #include "diff/pixel_boundary.h"
+#include "diff/pixel_options.h"
+#include "diff/result.h"
 
 #include <chrono>
 #include <memory>
@@ -64,6 +65,10 @@ struct PixelLoop {
 
 // Throws a clear Error unless a parameter is enabled and the scene has a sensor with a film.
 void require_film(const Scene& scene, const Parameters& params);
+// Throws a clear Error unless `adjoint` has the film's size.
+void check_adjoint_size(const Film& film, const Image& adjoint);
+// Throws a clear Error for scenes with participating media (for methods that trace surfaces only).
+void require_no_media(const Scene& scene);
 
 // Forward mode: dI/dθ along params.direction(), with per-pixel standard errors over the batches.
 DerivativeImage pixel_derivative(const PixelLoop& loop);

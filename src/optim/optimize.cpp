@@ -4,7 +4,7 @@
 #include "core/error.h"
 #include "core/interrupt.h"
 #include "core/plot.h"
-#include "diff/budget.h"
+#include "diff/psdr/budget.h"
 #include "optim/adam.h"
 #include "optim/shape_metrics.h"
 #include "render/render.h"

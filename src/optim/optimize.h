@@ -1,6 +1,6 @@
 // Inverse rendering: recover material and emitter parameters and the poses of shapes from a target image by
-// Adam on the gradient of an image loss (interior term, diff/interior.h, or the psdr total with the boundary
-// terms, diff/psdr.h). Driven by a JSON configuration (docs/optimize.md):
+// Adam on the gradient of an image loss (interior term, diff/psdr/interior.h, or the psdr total with the boundary
+// terms, diff/psdr/psdr.h). Driven by a JSON configuration (docs/optimize.md):
 //
 //   scene           string     scene file, relative to the configuration file
 //   defines         object     <default> overrides, name → string or number
@@ -40,7 +40,7 @@
 //   direct_spp      int        psdr: direct boundary samples per pixel (0 disables the term)
 //   indirect_spp    int        psdr: indirect boundary samples per pixel and technique (0 disables it)
 //                              With none of the three, gradient_spp is the psdr total's budget, split over
-//                              the terms by a calibration pass at the first iteration (diff/budget.h); with
+//                              the terms by a calibration pass at the first iteration (diff/psdr/budget.h); with
 //                              any of them, the others default to 4 and the interior gets gradient_spp.
 //   loss            string     "l2" (default) | "rel_l2" | "matching" (paper 003 Eq. 25, methods dpm-g/dpm-c)
 //   iterations      int        number of Adam steps
@@ -55,8 +55,8 @@
 //                              (default 1: constant rates)
 //   threads         int        worker threads (0 = all; default 0)
 #pragma once
+#include "core/image_loss.h"
 #include "diff/method.h"
-#include "optim/loss.h"
 #include "optim/problem.h"
 #include "optim/views.h"
 

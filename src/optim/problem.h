@@ -2,7 +2,7 @@
 //   Data parameters      their values (materials, emitters, ...),
 //   <shape>.translate    t ∈ R³, world units, relative to the scene's pose,
 //   <shape>.rotate       a rotation vector in degrees (axis-angle: direction = world axis, norm = angle)
-//                        about the shape's bounding-box center in the scene (optim/pose.h),
+//                        about the shape's bounding-box center in the scene (diff/pose.h),
 //   <shape>.deform@c     the displacement θ ∈ R³ (world units) of a deformation handle at c (default: the
 //                        bounding-box center), x → x + θ exp(−‖x − c‖² / 2r²) (optim/deformation.h); a shape
 //                        may have several handles, not together with a pose.
@@ -12,10 +12,10 @@
 // silhouettes and shadows carry most of its signal.
 #pragma once
 #include "diff/method.h"
+#include "diff/pose.h"
 #include "optim/adam.h"
 #include "optim/deformation.h"
 #include "optim/large_steps.h"
-#include "optim/pose.h"
 
 #include <limits>
 #include <memory>

@@ -1,5 +1,5 @@
 // What the bidirectional path tracer's walks and connections drew, kept for the differentiable estimator
-// (diff/bdpt_interior.h): the chain of straight pieces (media, null-surface crossings) of every sampled
+// (diff/psdr/bdpt_interior.h): the chain of straight pieces (media, null-surface crossings) of every sampled
 // segment and connection, and each (s, t) strategy's MIS-weighted contribution. The renderer records nothing
 // (BDPTContext::record is null), so its results and speed are unchanged.
 #pragma once

@@ -18,7 +18,7 @@ struct SPPMPixel {
 };
 
 // The integrator's parameters (the table in sppm.cpp), which the differentiable photon-mapping estimators
-// (diff/dpm.h) read from a scene's `sppm` integrator.
+// (diff/dpm/dpm.h) read from a scene's `sppm` integrator.
 struct SPPMSettings {
     int64_t photon_count = 250000;
     float initial_radius = 0.f; // 0: automatic (sppm_radius)

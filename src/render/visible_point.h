@@ -43,7 +43,7 @@ VisiblePoint trace_visible_point(const Scene& scene, Sampler& sampler, Ray ray, 
 
 // The eye subpath of pass `pass` in pixel (x, y): the sampler started at (seed, pixel, pass) gives the film
 // position and the lens sample, then trace_visible_point. The one sequence of random numbers sppm traces and
-// the differentiable photon-mapping estimators (diff/dpm.h) re-trace.
+// the differentiable photon-mapping estimators (diff/dpm/dpm.h) re-trace.
 struct PixelVisiblePoint {
     VisiblePoint vp;
     Ray ray;          // the primary ray

@@ -1,0 +1,79 @@
+// Differentiable photon mapping (paper 003): derivatives of the SPPM image at a fixed merging radius, from
+// photon-mapping paths on extended path space manifolds (diff/dpm/photon_path.h).
+//
+// Each pass traces the SPPM eye subpath of every pixel to its visible point (render/visible_point.h, the same
+// random numbers as the `sppm` integrator) and photon_count light subpaths (render/photon_tracing.h); a
+// fraction of the pixels (paper §6: 1/16; by default all) then samples photons merged at its visible point
+// (paper: one; by default 16), with probability proportional to their luminance contribution, re-traces each
+// photon's light subpath and differentiates the path's contribution (Eq. 23) on its EPSM:
+//   DPM-C (§5.2.1)  the fixed-eye-ray EPSM: contribution derivatives only, comparable with central finite
+//                   differences of SPPM renders at a fixed radius (`alpha` 1) with common random numbers;
+//   DPM-G (§5.2.2)  the average of the fixed-density and vertex-merging EPSMs, whose eye rays move: their
+//                   contribution derivatives, and the paths' screen-space motion (Eq. 7) for matching losses.
+// The estimate is d/dθ of the photon-mapped light; emission seen directly or through specular chains and
+// visibility discontinuities (boundary terms) are not differentiated. The radius is the scene's `sppm`
+// integrator's initial_radius (automatic for 0), its photon_count, kernel, max_depth and rr_depth are used
+// (without an `sppm` integrator: its defaults with the smooth kernel).
+#pragma once
+#include "core/sinkhorn.h"
+#include "diff/parameters.h"
+#include "diff/result.h"
+
+namespace penumbra {
+
+enum class DpmVariant { C, G };
+
+struct DpmOptions {
+    DpmVariant variant = DpmVariant::C;
+    int spp = 16;    // SPPM passes (per batch)
+    int batches = 1; // forward mode: independent batches of passes
+    uint64_t seed = 0;
+    int threads = 0;
+    // Pixels that differentiate paths in each pass, and paths per such pixel: every pixel and 16 paths by
+    // measurement (variance × time 0.006–0.009 of the paper's 1/16 of the pixels with one path each on the
+    // Fig. 6 scene at 32² and 128², docs/dpm.md: a pass's photons are shared by all its paths).
+    double pixel_fraction = 1.0;
+    int paths = 16;
+    // The matching loss's optimal transport: GeomLoss's schedule (blur 0.01, ε-scaling 0.5, stop after the
+    // annealing), as the paper ran it; a 64² gradient took 1.1 s against 4.3 s at scaling 0.9 (two runs on a
+    // loaded machine, indicative: docs/dpm.md).
+    SinkhornOptions matching{0.01, 0.5, 1.0, 1e-3, 1};
+    std::function<void(float)> progress;
+};
+
+struct DpmDerivative {
+    // DPM-C: dI/dθ along params.direction() (the primal: SPPM at the fixed radius, same samples). DPM-G: the
+    // contribution derivatives, each at the pixel its path was sampled in.
+    DerivativeImage image;
+    // DPM-G: the screen-space motion of the paths' contributions, Σ I dp/dθ per pixel (p in pixels, Eq. 7),
+    // with standard errors; with `image`, d/dθ of any statistic of where the light lands (e.g. a caustic's
+    // centroid). Empty for DPM-C, whose eye rays do not move.
+    Image screen_x, screen_y, screen_x_stderr, screen_y_stderr;
+    // The standard error of the derivative image's mean from the spread of the batches' means: photons are
+    // shared by neighbouring pixels, so pixel errors are correlated and sqrt(Σσ²)/N underestimates it (by up
+    // to 2× on the validation scenes, docs/dpm-validation.md).
+    double mean_stderr = 0;
+    std::vector<std::string> warnings; // the scene's sppm settings the estimate does not follow
+};
+
+// Forward mode along params.direction().
+DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const DpmOptions& options);
+// Reverse mode: dL/dθ = Σ_pixels ∂L/∂I · dI/dθ for every enabled parameter (DPM-G: contribution derivatives).
+Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                      const DpmOptions& options);
+
+struct DpmMatching {
+    Gradient gradient;
+    double loss = 0; // Eq. 25 averaged over the pixels
+};
+
+// The matching loss of §5.3 (Eq. 25, diff/dpm/matching_loss.h): the estimator's SPPM image is matched pixel to
+// pixel to the target by entropic optimal transport on RGB + xy (Xing et al. 2022, 2023), and each pixel is
+// pulled toward its match's position and colour; dL/dθ chains ∂L/∂p and ∂L/∂I with the screen-space motion
+// and the contribution derivatives of the paths sampled in the pixel (DPM-G: averaged over its two EPSMs;
+// DPM-C: contribution only). The passes are traced twice with the same random numbers: once for the image
+// to match, once to differentiate.
+DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, const Image& target,
+                                  const DpmOptions& options);
+
+} // namespace penumbra

@@ -1,0 +1,148 @@
+#include "diff/psdr/bdpt_interior.h"
+
+#include "diff/path_measurement.h"
+#include "render/bdpt.h"
+#include "render/bdpt_connect.h"
+#include "render/light_medium.h"
+
+#include <limits>
+
+namespace penumbra {
+
+namespace {
+
+// f / detach(f), one where the reference value vanishes (the strategy's contribution does too).
+Var relative(const Var& f) { return f.v != 0.f && std::isfinite(f.v) ? f / Var(f.v) : Var(1.f); }
+
+// z_1 on the geometry with its camera factor (diff/psdr/interior_media.h's rule): image space, on the fixed camera
+// ray (a medium vertex keeps its fraction of the ray's piece between the moving surfaces around it, with the
+// Jacobian of that stretch); material form, X(p1, θ) with W/p = camera(x1, n, J).
+MeasuredVertex<Var> first_vertex(const MaterialForm& form, const PathVertex& v, const LegChain& chain,
+                                 const Ray& ray, const Vec3<Var>& o, const CameraFactor& camera,
+                                 float escaped_weight, Var& factor) {
+    const bool image = form.image_space_first_vertex();
+    MeasuredVertex<Var> x;
+    x.ref = &v;
+    factor = Var(1.f);
+    if (v.infinite) {
+        if (!image) factor = Var(escaped_weight);
+        return escaped_vertex(v, o, ray.d);
+    }
+    if (!image) {
+        x = measured_vertex<Var>(v, form);
+        factor = camera(x.p, x.surface ? x.si.n : normalize(o - x.p), x.jacobian);
+        x.jacobian = Var(1.f);
+        return x;
+    }
+    if (v.type == VertexType::Surface) {
+        Ray camera_ray = ray;
+        camera_ray.tmax = Infinity;
+        x.si = form.ray_vertex(v.si, camera_ray);
+        x.p = x.si.p;
+        x.surface = true;
+        return x;
+    }
+    const LegPiece& piece = chain.pieces[size_t(chain.count - 1)];
+    const Vec3<Var> far = o + Vec3<Var>(ray.d);
+    const Vec3<Var> start =
+        chain.count > 1 ? crossing_point(form, chain.pieces[size_t(chain.count - 2)].bound, o, far) : o;
+    const float distance = dot(v.p - ray.o, ray.d) / squared_norm(ray.d);
+    if (piece.bound.is_valid()) {
+        const float length0 = piece.bound.t, s = (distance - piece.start) / length0;
+        const Vec3<Var> stop = crossing_point(form, piece.bound, o, far);
+        x.p = start + (stop - start) * Var(s);
+        factor = norm(stop - start) / Var(length0 * norm(ray.d));
+    } else {
+        x.p = start + Vec3<Var>(ray.d) * Var(distance - piece.start);
+    }
+    return x;
+}
+
+// Why the bidirectional estimator cannot differentiate the scene (empty: it can).
+std::string unsupported(const Scene& scene) {
+    for (const auto& e : scene.emitters)
+        if (e->is_infinite()) return "light subpaths of infinite lights are not differentiated";
+    return "";
+}
+
+} // namespace
+
+InteriorEstimator parse_interior_estimator(const std::string& name) {
+    if (name == "auto") return InteriorEstimator::Auto;
+    if (name == "unidirectional") return InteriorEstimator::Unidirectional;
+    if (name == "bidirectional") return InteriorEstimator::Bidirectional;
+    throw Error("interior estimator must be unidirectional, bidirectional or auto, got '" + name + "'");
+}
+
+bool bidirectional_interior(const Scene& scene, InteriorEstimator estimator) {
+    if (estimator == InteriorEstimator::Auto)
+        return scene_integrator_is_bdpt(scene) &&
+               unsupported(scene).empty();
+    return estimator == InteriorEstimator::Bidirectional;
+}
+
+void require_bidirectional_support(const Scene& scene) {
+    const std::string why = unsupported(scene);
+    if (!why.empty())
+        throw Error("the bidirectional interior estimator cannot differentiate this scene (" + why +
+                    "): use --interior-estimator unidirectional");
+}
+
+// Σ_{s, t>=2} C_{s,t} f(x̄; θ) / f(x̄; θ0) times the camera factor (paper 001 §7 with §5.1's first vertex).
+Color3<Var> bidirectional_camera_path(const Scene& scene, const MaterialForm& form, Sampler& sampler,
+                                      const Ray& ray, const Color3f& ray_weight, const CameraFactor& camera,
+                                      float escaped_weight, const PathSettings& settings, RayCounter& rays) {
+    thread_local BDPTRecord record;
+    thread_local std::vector<PathVertex> camera_path, light_path;
+    thread_local std::vector<MeasuredVertex<Var>> z, y;
+    thread_local std::vector<Color3<Var>> camera_factors, light_factors;
+    thread_local Image no_splats(1, 1);
+    const BDPTSettings bdpt = bdpt_settings(scene, settings);
+    BoundingSphere bounds = scene.bounding_sphere();
+    bounds.radius = std::max(RayEpsilon, bounds.radius * (1.f + RayEpsilon));
+    // No sensor connection: light tracing (t = 1) is neither sampled nor counted in the MIS weights.
+    BDPTContext ctx{scene, bdpt, sampler, rays, scene_has_media(scene), false, bounds, &record};
+    const size_t unlimited = std::numeric_limits<size_t>::max();
+    const size_t max_camera = bdpt.max_depth < 0 ? unlimited : size_t(bdpt.max_depth) + 1;
+    const size_t max_light = bdpt.max_depth < 0 ? unlimited : size_t(bdpt.max_depth);
+    record.clear();
+    camera_subpath(ctx, ray, Vec2f(0.5f), camera_path, max_camera);
+    light_subpath(ctx, light_path, max_light);
+    connect_subpaths(ctx, camera_path, light_path, no_splats);
+    Color3<Var> L(Var(0.f));
+    if (camera_path.size() < 2 || record.count == 0) return L;
+
+    // The camera subpath on the geometry.
+    const bool image = form.image_space_first_vertex();
+    const Vec3<Var> o = image ? Vec3<Var>(ray.o) : form.camera_position(ray.o);
+    Var camera_factor;
+    z.assign(1, MeasuredVertex<Var>());
+    z.push_back(
+        first_vertex(form, camera_path[1], record.camera[1], ray, o, camera, escaped_weight, camera_factor));
+    for (size_t k = 2; k < camera_path.size(); ++k) {
+        const PathVertex& v = camera_path[k];
+        if (v.infinite) {
+            z.push_back(escaped_vertex(v, z.back().p, v.d_env));
+        } else {
+            z.push_back(measured_vertex<Var>(v, form));
+        }
+    }
+    camera_prefix(z, o, record, form, camera_factors);
+
+    // The light subpath on the geometry.
+    y.clear();
+    for (const PathVertex& v : light_path)
+        y.push_back(measured_vertex<Var>(v, form));
+    light_prefix(y, record, form, light_factors);
+
+    for (int k = 0; k < record.count; ++k) {
+        const StrategyRecord& st = record.strategies[size_t(k)];
+        if (is_black(st.value)) continue;
+        const Color3<Var> f = path_measurement(st, z, y, camera_factors, light_factors, o, scene, form);
+        L += Color3<Var>(Var(st.value.x) * relative(f.x), Var(st.value.y) * relative(f.y),
+                         Var(st.value.z) * relative(f.z));
+    }
+    return L * Color3<Var>(ray_weight) * camera_factor;
+}
+
+} // namespace penumbra

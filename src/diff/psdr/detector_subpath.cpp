@@ -1,0 +1,121 @@
+#include "diff/psdr/detector_subpath.h"
+
+#include "diff/media_walk.h"
+#include "render/adjoint_shading.h"
+#include "render/volume_visibility.h"
+
+namespace penumbra {
+
+namespace {
+
+// A vertex of the detector subpath: on a surface (si valid) or in `medium` at p (si.p), wi toward the previous
+// vertex (world).
+struct DetectorVertex {
+    SurfaceInteraction3f si;
+    Vec3f wi;
+    const Medium* medium = nullptr; // at a medium vertex: its medium; at a surface: the one arrived through
+    bool in_medium() const { return !si.is_valid(); }
+};
+
+// The ray from p (a surface point with normal n, or a medium point: n = 0) to the camera.
+Ray ray_to_camera(const Scene& scene, const Vec3f& p, const Vec3f& n) {
+    const Sensor& sensor = *scene.sensor;
+    Interaction3f at;
+    at.p = p;
+    at.n = n;
+    return sensor.plugin == "orthographic" ? at.spawn_ray(sensor.to_sensor(p))
+                                           : at.spawn_ray_to(sensor.to_world.apply_point(Vec3f(0.f)));
+}
+
+// Whether no opaque surface hides the point p (normal n) from the camera (media and null boundaries aside).
+bool camera_sees(const Scene& scene, const Vec3f& p, const Vec3f& n, Sampler& sampler, RayCounter& rays) {
+    return !is_black(segment_transmittance(scene, ray_to_camera(scene, p, n), nullptr, sampler, rays));
+}
+
+// The camera's importance at vertex v in film measure, times the adjoint BSDF (or the phase function) toward
+// the camera and the connection's transmittance.
+bool connect_to_camera(const Scene& scene, const DetectorVertex& v, CameraConnection& out, Sampler& sampler,
+                       RayCounter& rays) {
+    const Sensor& sensor = *scene.sensor;
+    const Vec3f& p = v.si.p;
+    const Vec3f to_cam = sensor.to_sensor(p);
+    const Vec3f n = v.in_medium() ? to_cam : v.si.n;
+    float jacobian;
+    if (!sensor.film_position(p, n, out.s, jacobian)) return false;
+    const float r = sensor.film->rfilter->radius(); // border pixels' filters reach r beyond the film
+    if (!(out.s.x >= -r && out.s.y >= -r && out.s.x <= sensor.film->width + r && out.s.y <= sensor.film->height + r))
+        return false;
+    const float cos_cam = std::abs(dot(n, to_cam));
+    if (!(cos_cam > 0.f)) return false;
+    Color3f f;
+    const Medium* medium = v.medium;
+    if (v.in_medium()) {
+        f = Color3f(v.medium->phase->eval<float>(v.wi, to_cam));
+    } else {
+        f = v.si.bsdf()->eval(BSDFContext{TransportMode::Importance}, v.si, v.si.to_local(to_cam)) *
+            adjoint_shading_correction(v.si, to_cam);
+        medium = target_medium(*v.si.shape, v.si.n, to_cam, medium);
+    }
+    if (is_black(f)) return false;
+    const Color3f tr = segment_transmittance(scene, ray_to_camera(scene, p, v.in_medium() ? Vec3f(0.f) : v.si.n),
+                                             medium, sampler, rays);
+    out.weight = f * tr * (jacobian / cos_cam);
+    return !is_black(out.weight);
+}
+
+} // namespace
+
+void detector_connections(const Scene& scene, const BoundarySegment& segment, int t_min, int t_max,
+                          const PathSettings& settings, Sampler& sampler, RayCounter& rays, DetectorConnections& out) {
+    const BSDFContext ctx{TransportMode::Importance};
+    DetectorVertex v{segment.receiver, segment.direction * -1.f, segment.medium};
+    Color3f throughput(1.f);
+    for (int t = 0; t_max < 0 || t <= t_max; ++t) {
+        const BSDF* bsdf = v.si.bsdf();
+        if (!v.in_medium() && !bsdf) return;
+        if (t >= t_min && (v.in_medium() || bsdf->has(BSDFSmooth))) {
+            CameraConnection c;
+            if (connect_to_camera(scene, v, c, sampler, rays) &&
+                (t > 0 || camera_sees(scene, segment.dark_point, v.in_medium() ? Vec3f(0.f) : v.si.n, sampler, rays))) {
+                c.weight *= throughput;
+                c.t = t;
+                out.items[out.count++] = c;
+                if (out.count == DetectorConnections::Capacity) return;
+            }
+        }
+        if (t == t_max) return;
+        // The next direction: phase sampling (weight 1) or adjoint BSDF sampling.
+        Vec3f d;
+        Ray ray;
+        const Medium* medium = v.medium;
+        if (v.in_medium()) {
+            const auto [wo, pdf] = v.medium->phase->sample(v.wi, sampler.next_2d());
+            if (!(pdf > 0.f)) return;
+            d = wo;
+            ray = Ray(v.si.p, d);
+        } else {
+            const float u1 = sampler.next_1d();
+            const auto [bs, weight] = bsdf->sample(ctx, v.si, u1, sampler.next_2d());
+            if (is_black(weight)) return;
+            d = v.si.to_world(bs.wo);
+            throughput *= weight * adjoint_shading_correction(v.si, d);
+            medium = target_medium(*v.si.shape, v.si.n, d, medium);
+            ray = v.si.spawn_ray(d);
+        }
+        const FlightEnd end = sample_interaction(scene, ray, medium, true, sampler, rays);
+        if (end.kind == FlightEnd::Kind::None || end.kind == FlightEnd::Kind::Escaped) return;
+        throughput *= end.weight;
+        v.si = end.kind == FlightEnd::Kind::Surface ? end.si : SurfaceInteraction3f{};
+        if (end.kind == FlightEnd::Kind::Medium) v.si.p = end.p;
+        else v.si.wi = v.si.to_local(d * -1.f);
+        v.wi = d * -1.f;
+        v.medium = end.medium;
+        if (t + 1 >= settings.rr_depth) {
+            const float q = std::min(max_component(throughput), 0.95f);
+            if (sampler.next_1d() >= q) return;
+            throughput /= q;
+        }
+    }
+}
+
+} // namespace penumbra

@@ -1,0 +1,150 @@
+#include "diff/psdr/indirect_boundary.h"
+
+#include "diff/media_radiance.h"
+#include "diff/media_walk.h"
+#include "diff/psdr/detector_subpath.h"
+#include "diff/psdr/direct_boundary.h"
+#include "render/light_medium.h"
+
+namespace penumbra {
+
+namespace {
+
+constexpr uint64_t EmitterSalt = 0xD1B54A32D192ED03ULL, DirectionalSalt = 0x8CB92BA72F3D8DD7ULL;
+
+// Deepest detector vertex for a boundary segment whose source subpath has at least `source_segments` segments
+// (-1: unbounded): the whole path camera → x_Dt … x_D0 → x_S0 → … has t + 2 + source_segments − 1 segments.
+int max_detector_depth(const PathSettings& settings, int source_segments) {
+    return settings.max_depth < 0 ? -1 : settings.max_depth - 1 - source_segments;
+}
+
+// Radiance x_S0 reflects toward x_D0 (its emission excluded), by path tracing from x_S0 with at most
+// `max_depth` segments counting x_D0 → x_S0 (-1: unbounded).
+Color3f reflected_radiance(const Scene& scene, const SurfaceInteraction3f& x_s0, const Vec3f& from, int max_depth,
+                           const PathSettings& settings, Sampler& sampler, RayCounter& rays) {
+    PathSettings source = settings;
+    source.max_depth = max_depth;
+    source.hide_emitters = true;
+    const Ray arriving(from, normalize(x_s0.p - from));
+    return trace_path<float>(scene, sampler, arriving, x_s0, x_s0, ReferenceGeometry{}, source, rays);
+}
+
+// Radiance the source vertex x_S0 sends toward x_D0 (its emission excluded) with at most `max_depth` segments
+// counting x_D0 → x_S0 (-1: unbounded): path tracing in vacuum, volumetric path tracing in media
+// (diff/media_radiance.h; at a medium vertex the in-scattered radiance, σ_s being in the flight's weight).
+Color3f source_radiance(const Scene& scene, const FlightEnd& x_s0, const Vec3f& from, bool media, int max_depth,
+                        const PathSettings& settings, Sampler& sampler, RayCounter& rays) {
+    if (!media) return reflected_radiance(scene, x_s0.si, from, max_depth, settings, sampler, rays);
+    RadianceVertex v{x_s0.kind == FlightEnd::Kind::Surface ? x_s0.si : SurfaceInteraction3f{},
+                     normalize(from - x_s0.p), x_s0.medium};
+    v.si.p = x_s0.p;
+    return vertex_radiance(scene, v, max_depth, false, settings, sampler, rays);
+}
+
+// Algorithm 1 of paper 001: one multi-directional boundary sample, its endpoints drawn by sampleInteraction
+// (surface or medium vertices).
+BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, const SegmentContext& context,
+                                  const PathSettings& settings, const BoundarySampleIndex& index, Sampler& sampler,
+                                  RayCounter& rays) {
+    BoundarySample out;
+    const int t_max = max_detector_depth(settings, 2);
+    if (settings.max_depth >= 0 && t_max < 0) return out;
+    const EdgePoint x_b = sample_edge_point(edges, edges.all, index.stratified(sampler));
+    Vec3f w_b;
+    float pdf_w;
+    if (!sample_grazing_direction(*x_b.edge, sampler.next_2d(), w_b, pdf_w)) return out;
+
+    // x_S0 (line 4): a free flight behind x_B along −ω_B, ending at a medium vertex or the first surface.
+    // The medium around x_B: a line grazing an edge passes outside the edge's shape (its exterior medium, if the
+    // shape bounds media; otherwise the medium found by the walk from the sensor).
+    const Shape& edge_shape = *x_b.edge->shape;
+    const Medium* edge_medium = !context.media                              ? nullptr
+                                : edge_shape.interior || edge_shape.exterior ? edge_shape.exterior.get()
+                                                                             : medium_at(scene, x_b.p, rays);
+    const FlightEnd x_s0 = sample_interaction(scene, Ray(x_b.p - w_b * ray_offset_scale(x_b.p), w_b * -1.f), edge_medium,
+                                              context.volume_endpoints, sampler, rays);
+    SegmentSource source{.p = x_s0.p, .n = Vec3f(0.f), .medium = x_s0.medium, .in_medium = true, .from_edge = true,
+                         .edge_medium = edge_medium};
+    if (x_s0.kind == FlightEnd::Kind::Surface) {
+        const SurfaceInteraction3f& si = x_s0.si;
+        if (!si.bsdf() || !si.bsdf()->has(BSDFSmooth)) return out;
+        source.n = si.n;
+        source.shape = si.shape;
+        source.prim = si.prim_index;
+        source.bary = si.bary;
+        source.in_medium = false;
+    } else if (x_s0.kind != FlightEnd::Kind::Medium) {
+        return out;
+    }
+    const BoundarySegment seg = trace_boundary_segment(scene, context, source, x_b, sampler, rays);
+    if (!seg.valid) return out;
+
+    DetectorConnections connections;
+    detector_connections(scene, seg, 0, t_max, settings, sampler, rays, connections);
+    if (connections.count == 0) return out;
+
+    // G(x_S0, x_D0) times the Jacobian of Eqs. 40–43 over the density of (x_B, ω_B): for two surface vertices
+    //   |cos φ_S| |cos φ_D| / r² · r_S² / |cos φ_S| · stretch = |cos φ_D| r_S² stretch / r²,
+    // and the same expression for medium vertices (no cosine there, stretch = dA(x_D0)/(dℓ(x_B) dr_D)); the
+    // densities of r_S and r_D are in the flights' weights.
+    const float r_s2 = squared_norm(x_b.p - x_s0.p), r2 = squared_norm(seg.receiver.p - x_s0.p);
+    const Color3f factor =
+        x_s0.weight * seg.transmittance * (seg.cos_receiver * r_s2 * seg.stretch / r2 * edges.all.total_length / pdf_w);
+
+    // The source subpath: one estimate per path-length budget the connections need (all from the same
+    // random numbers; each is unbiased for its budget).
+    Color3f radiance(0.f);
+    int budget_of_radiance = -2;
+    const Sampler source_start = sampler;
+    for (int k = 0; k < connections.count; ++k) {
+        const CameraConnection& c = connections.items[k];
+        const int budget = settings.max_depth < 0 ? -1 : settings.max_depth - (c.t + 1);
+        if (budget != budget_of_radiance) {
+            sampler = source_start;
+            radiance = source_radiance(scene, x_s0, seg.receiver.p, context.media, budget, settings, sampler, rays);
+            budget_of_radiance = budget;
+        }
+        if (!is_black(radiance)) out.add_splat(c.s, radiance * c.weight * factor, seg.velocity_at_depth(c.t));
+    }
+    return out;
+}
+
+} // namespace
+
+Image IndirectBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
+    const Film& film = *scene_.sensor->film;
+    Image result(film.width, film.height);
+    if (edges_.empty()) return result;
+    const MaterialForm form(scene_, params, options.first_vertex);
+    const SegmentContext context{form, options.volume_endpoints, edges_.media};
+    const int t_max = max_detector_depth(options.path, 1);
+    if (!scene_.emitters.empty() && (t_max < 0 || t_max >= 1)) {
+        result = boundary_derivative(scene_, params, options, EmitterSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+            return sample_emitter_boundary(scene_, edges_, context, 1, t_max, options.path, index, sampler, rays);
+        });
+    }
+    const Image directional =
+        boundary_derivative(scene_, params, options, DirectionalSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+            return sample_directional(scene_, edges_, context, options.path, index, sampler, rays);
+        });
+    for (size_t i = 0; i < result.pixels.size(); ++i) result.pixels[i] += directional.pixels[i];
+    return result;
+}
+
+void IndirectBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
+                                std::vector<double>& gradient) const {
+    if (edges_.empty()) return;
+    const MaterialForm form(scene_, params, options.first_vertex);
+    const SegmentContext context{form, options.volume_endpoints, edges_.media};
+    const int t_max = max_detector_depth(options.path, 1);
+    if (!scene_.emitters.empty() && (t_max < 0 || t_max >= 1)) {
+        boundary_gradient(scene_, params, adjoint, options, EmitterSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+            return sample_emitter_boundary(scene_, edges_, context, 1, t_max, options.path, index, sampler, rays);
+        }, gradient);
+    }
+    boundary_gradient(scene_, params, adjoint, options, DirectionalSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+        return sample_directional(scene_, edges_, context, options.path, index, sampler, rays);
+    }, gradient);
+}
+
+} // namespace penumbra

@@ -1,0 +1,249 @@
+#include "diff/war/war.h"
+
+#include "diff/film_sample.h"
+#include "diff/material_form.h"
+#include "diff/pixel_driver.h"
+#include "render/emitter_hit.h"
+#include "render/light_medium.h"
+#include "render/mis.h"
+
+namespace penumbra {
+
+namespace {
+
+// What the estimator of one scene shares across samples.
+struct WarContext {
+    const Scene& scene;
+    const Parameters& params;
+    MaterialForm form;
+    BoundaryTest boundary;
+    WarScene field;
+    PathSettings settings;
+
+    WarContext(const Scene& s, const Parameters& p, const WarOptions& o)
+        : scene(s), params(p), form(s, p, FirstVertex::Material),
+          boundary(s), field{s, p, form, boundary, o.field}, settings(o.path) {}
+};
+
+// The radiance of the infinite emitters along the escaped direction d warped on the sphere (value d, tangent
+// V).
+Color3<Var> environment(const WarContext& c, const Vec3f& d, const Vec3<Var>& warped) {
+    Color3<Var> L(Var(0.f));
+    for (const auto& e : c.scene.emitters)
+        if (e->is_infinite() && !e->is_delta())
+            L += e->eval_environment(c.form.direction_to_reference_light(*e, d) + (warped - Vec3<Var>(d)));
+    return L;
+}
+
+// Next-event estimation at the detector vertex p^D_n (Algorithm 2 lines 7–10): the light vertex p^S_n warped
+// conditioned on p^D_n, f_s L_e G J (1 + ∇·v) / (G_0 p_σ); the environment's direction warped on the sphere;
+// delta lights connected in material form without a warp.
+Color3<Var> next_event(const WarContext& c, const BSDF* bsdf, const SurfaceInteraction3f& hit,
+                       const SurfaceInteraction<Var>& si, const WarNeighbor& here,
+                       const DirectionSample3f& ds, AuxiliaryRng& rng, uint64_t& rays) {
+    const BSDFContext ctx{TransportMode::Radiance};
+    if (ds.emitter->is_delta()) return next_event_contribution(ctx, bsdf, si, ds, c.form);
+    if (const Shape* shape = ds.emitter->shape()) {
+        const SurfaceInteraction3f light =
+            surface_interaction<float>(*shape, ds.prim, ds.bary, MeshVertices{shape->mesh});
+        WarVertex y = war_vertex(c.field, light, here, rng, rays);
+        const Vec3<Var> to_light = y.si.p - si.p;
+        const Var dist2 = squared_norm(to_light);
+        const Vec3<Var> wo = to_light / sqrt(dist2);
+        y.si.wi = y.si.to_local(-wo);
+        const Var g = abs(dot(y.si.n, wo)) / dist2;
+        return bsdf->eval(ctx, si, si.to_local(wo)) * ds.emitter->eval(y.si) *
+               (relative_change(g * y.jacobian) / Var(ds.pdf));
+    }
+    const WarpEstimate e = war_direction(c.field, hit, here.position, ds.d, rng, rays);
+    return bsdf->eval(ctx, si, si.to_local(e.direction)) * (e.jacobian / Var(ds.pdf)) *
+           ds.emitter->eval_environment(c.form.direction_to_reference_light(*ds.emitter, ds.d) +
+                                        (e.direction - Vec3<Var>(ds.d)));
+}
+
+// The radiance leaving the first vertex toward the camera along one path (render/path_tracer.h's sampling in
+// the reference configuration; Algorithm 2 lines 6–17), every vertex warped as it is sampled.
+Color3<Var> warped_path(const WarContext& c, Sampler& sampler, AuxiliaryRng& rng, const Ray& primary,
+                        const SurfaceInteraction3f& first, const WarVertex& first_vertex, uint64_t& rays) {
+    const BSDFContext ctx{TransportMode::Radiance};
+    const PathSettings& settings = c.settings;
+    Color3<Var> L(Var(0.f)), throughput(Var(1.f));
+    if (settings.max_depth == 0) return L;
+    const unsigned max_depth = unsigned(settings.max_depth); // -1 wraps to "infinite"
+    float eta = 1.f;
+    Ray ray = primary;
+    SurfaceInteraction3f hit = first, prev_hit;
+    SurfaceInteraction<Var> si = first_vertex.si;
+    Vec3<Var> material = first_vertex.material, escaped(ray.d);
+    float prev_bsdf_pdf = 1.f;
+    bool prev_bsdf_delta = true;
+
+    for (unsigned depth = 0;; ++depth) {
+        if (!(depth == 0 && settings.hide_emitters))
+            for_each_emitter_hit(
+                c.scene, prev_hit, ray.d, hit, [&](const Emitter* e, const Color3f&, float pdf) {
+                    const float w = prev_bsdf_delta ? 1.f : mis_power(prev_bsdf_pdf, pdf);
+                    const Color3<Var> Le = hit.is_valid() ? e->eval(si) : environment(c, ray.d, escaped);
+                    L += throughput * Le * Var(w);
+                });
+        if (!hit.is_valid() || depth + 1 >= max_depth) break;
+        const BSDF* bsdf = hit.bsdf();
+        if (!bsdf) break;
+        const WarNeighbor here{hit, material};
+
+        if (bsdf->has(BSDFSmooth) && !c.scene.emitters.empty()) {
+            const auto [ds, em_weight] = c.scene.sample_emitter_direction(hit, sampler.next_2d(), true);
+            ++rays;
+            if (!is_black(em_weight)) {
+                const float w = ds.delta ? 1.f : mis_power(ds.pdf, bsdf->pdf(ctx, hit, hit.to_local(ds.d)));
+                L += throughput * next_event(c, bsdf, hit, si, here, ds, rng, rays) * Var(w);
+            }
+        } else {
+            sampler.next_2d(); // keep the sample stream aligned across materials
+        }
+
+        const float u1 = sampler.next_1d();
+        const auto [bs, weight] = bsdf->sample(ctx, hit, u1, sampler.next_2d());
+        if (is_black(weight)) break;
+        const Vec3f d = hit.to_world(bs.wo);
+        ray = hit.spawn_ray(d);
+        ++rays;
+        const SurfaceInteraction3f next = c.scene.intersect(ray);
+        const bool delta = (bs.sampled_type & BSDFDelta) != 0;
+        SurfaceInteraction<Var> next_si;
+        if (delta) {
+            // No area integral at a delta lobe: the direction is fixed, no derivative flows through it.
+            throughput *= Color3<Var>(weight);
+            if (next.is_valid()) next_si = c.form.vertex(next), material = next_si.p;
+            escaped = Vec3<Var>(d);
+        } else if (next.is_valid()) {
+            // p^D_{n+1} warped conditioned on p^D_n: f_s G J (1 + ∇·v) / (G_0 p_σ).
+            const WarVertex x = war_vertex(c.field, next, here, rng, rays);
+            const Vec3<Var> to_next = x.si.p - si.p;
+            const Var dist2 = squared_norm(to_next);
+            const Vec3<Var> wo = to_next / sqrt(dist2);
+            const Var g = abs(dot(x.si.n, wo)) / dist2;
+            throughput *=
+                bsdf->eval(ctx, si, si.to_local(wo)) * (relative_change(g * x.jacobian) / Var(bs.pdf));
+            next_si = x.si;
+            material = x.material;
+        } else {
+            const WarpEstimate e = war_direction(c.field, hit, material, d, rng, rays);
+            throughput *= bsdf->eval(ctx, si, si.to_local(e.direction)) * (e.jacobian / Var(bs.pdf));
+            escaped = e.direction;
+        }
+        if (next.is_valid()) {
+            next_si.wi = next_si.to_local(normalize(si.p - next_si.p));
+            si = next_si;
+        }
+        eta *= bs.eta;
+        prev_hit = hit;
+        prev_bsdf_pdf = bs.pdf;
+        prev_bsdf_delta = delta;
+        hit = next;
+        if (depth + 1 >= unsigned(settings.rr_depth) && !survives_roulette(throughput, eta, sampler)) break;
+    }
+    return L;
+}
+
+// One camera sample of pixel (px, py): the film position from the defensive filter mixture
+// (diff/film_sample.h), the first vertex p^D_1 warped conditioned on the camera, and the camera factor
+// P_j(s(x1(θ))) |ds/dA|(θ) J (1 + ∇·v) / (p_s |ds/dA|(θ0)) of the material-form first vertex (paper 001).
+Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, AuxiliaryRng& rng, int px, int py,
+                          uint64_t& rays) {
+    const Sensor& sensor = *c.scene.sensor;
+    const Film& film = *sensor.film;
+    const FilmSample fs = sample_film(*film.rfilter, sampler, false);
+    const Vec2f center(px + 0.5f, py + 0.5f);
+    const auto [ray, ray_weight] = sensor.sample_ray(center + fs.offset, sampler.next_2d());
+    ++rays;
+    const SurfaceInteraction3f first = c.scene.intersect(ray);
+    if (!first.is_valid()) {
+        const float w = film.filter_weight(px, py, center + fs.offset) / fs.pdf;
+        return c.settings.hide_emitters ? Color3<Var>(Var(0.f))
+                                        : c.form.environment(c.scene, ray.d) * Color3<Var>(ray_weight * w);
+    }
+    const WarNeighbor camera{Interaction3f{Infinity, ray.o, Vec3f(0.f)}, c.form.camera_position(ray.o)};
+    WarVertex x1 = war_vertex(c.field, first, camera, rng, rays);
+    const Vec3<Var> p_cam = c.form.to_reference_camera(x1.si.p, ray.o);
+    const Vec3<Var> n_cam = c.form.direction_to_reference_camera(x1.si.n);
+    Vec2<Var> s;
+    Var jacobian;
+    if (!sensor.film_position(p_cam, n_cam, s, jacobian)) return Color3<Var>(Var(0.f));
+    const Var factor = film.filter_weight(px, py, s) * relative_change(jacobian * x1.jacobian) / Var(fs.pdf);
+    x1.si.wi = x1.si.to_local(c.form.direction_from_reference_camera(sensor.to_sensor(p_cam)));
+    return warped_path(c, sampler, rng, ray, first, x1, rays) * factor;
+}
+
+// ṡ · across at a point s of a pixel edge or of the film's edge: the film velocity
+// d/dθ s(X(p + (θ − θ0) v(p), θ)) of the reparameterized first vertex p seen through s (material motion,
+// moving camera and warp), for the flux −∮ P_j L (ṡ · n_out) over the edges where the filters jump
+// (diff/pixel_boundary.h): the divergence theorem of Eq. 34 at p_1 with a field that does not vanish where
+// s(p_1) crosses them. Zero for the environment seen directly (its film position does not move:
+// camera_sample). The auxiliary stream is the edge sample's own.
+Var film_edge_velocity(const WarScene& c, uint64_t seed, const Vec2f& s, const Vec2f& across,
+                       uint64_t stream, RayCounter& rays) {
+    const Sensor& sensor = *c.scene.sensor;
+    const Ray ray = sensor.sample_ray(s, Vec2f(0.5f)).first;
+    ++rays.rays;
+    const SurfaceInteraction3f first = c.scene.intersect(ray);
+    if (!first.is_valid()) return Var(0.f);
+    AuxiliaryRng rng(seed ^ 0x5851F42D4C957F2DULL, stream, 0, WarSalt);
+    const WarNeighbor camera{Interaction3f{Infinity, ray.o, Vec3f(0.f)}, c.form.camera_position(ray.o)};
+    const WarVertex x1 = war_vertex(c, first, camera, rng, rays.rays);
+    Vec2<Var> st;
+    Var jacobian;
+    if (!sensor.film_position(c.form.to_reference_camera(x1.si.p, ray.o),
+                              c.form.direction_to_reference_camera(x1.si.n), st, jacobian))
+        return Var(0.f);
+    return (st.x - Var(s.x)) * Var(across.x) + (st.y - Var(s.y)) * Var(across.y);
+}
+
+// The flux across the edges where the filters jump: diff/pixel_boundary.h with the film velocity of the
+// warped first vertex seen at the edge point.
+PixelBoundary war_film_edge_term(const WarScene& c, uint64_t seed, int spp) {
+    return PixelBoundary(
+        c.scene,
+        [&c, seed](const Vec2f& s, const Vec2f& across, uint64_t stream, RayCounter& rays) {
+            return film_edge_velocity(c, seed, s, across, stream, rays);
+        },
+        film_edge_strata(*c.scene.sensor->film, spp));
+}
+
+} // namespace
+
+void set_war_samples(PixelLoop& loop, std::shared_ptr<const WarScene> field, WarSample sample,
+                     const std::string& method) {
+    loop.tiles =
+        per_sample([sample = std::move(sample)](Sampler& sampler, const PixelSample& s, RayCounter& rays) {
+            AuxiliaryRng rng(s.seed, s.pixel, uint64_t(s.m), WarSalt);
+            return sample(sampler, rng, s.x, s.y, rays.rays);
+        });
+    loop.film_edge = [field, spp = loop.options.spp](uint64_t seed) { return war_film_edge_term(*field, seed, spp); };
+    loop.unwarped_delta_lights = method;
+}
+
+void require_war_support(const Scene& scene, const Parameters& params) {
+    require_film(scene, params);
+    if (scene_has_media(scene))
+        throw Error(
+            "method war (paper 000) differentiates surfaces only and the scene has participating media: "
+            "use the psdr method (the default)");
+    if (!scene.sensor->projects_points())
+        throw Error(
+            "method war needs a sensor with one center of projection (perspective, orthographic, "
+            "thinlens with aperture 0): its first vertex's field is conditioned on the camera's position");
+}
+
+DerivativeImage war_derivative(const Scene& scene, const Parameters& params, const WarOptions& options) {
+    require_war_support(scene, params);
+    return pixel_derivative(war_loop<WarContext>(scene, params, options, "war", camera_sample));
+}
+
+Gradient war_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                      const WarOptions& options) {
+    require_war_support(scene, params);
+    return pixel_gradient(war_loop<WarContext>(scene, params, options, "war", camera_sample), adjoint);
+}
+
+} // namespace penumbra

@@ -1,0 +1,76 @@
+// The method `was`: warped-area sampling of paper 004 (diff/was/warped_area.h) behind the common front of
+// diff/method.h. One term: the whole derivative (interior and boundary together).
+#include "diff/method_adapter.h"
+#include "diff/was/warped_area.h"
+
+#include <cmath>
+
+namespace penumbra {
+
+namespace {
+
+class WasMethod final : public DerivativeMethod {
+  public:
+    explicit WasMethod(const MethodOptions& o) {
+        base_.warp.unbiased = o.get_bool("was-unbiased", false);
+        base_.warp.aux_count = o.get_int("was-aux", base_.warp.aux_count);
+        base_.warp.weight.kappa = float(o.get_float("was-kappa", base_.warp.weight.kappa));
+        base_.warp.antithetic = !o.get_bool("no-antithetic", false);
+        base_.control_variate = !o.get_bool("no-control-variate", false);
+
+        char kappa[32];
+        std::snprintf(kappa, sizeof(kappa), "%g", double(base_.warp.weight.kappa));
+        name_ = std::string(base_.warp.unbiased ? "unbiased" : "consistent") + " warped-area sampling, " +
+                (base_.warp.unbiased ? "N' ~ Geom" : "N' = " + std::to_string(base_.warp.aux_count)) +
+                ", kappa = " + kappa + (base_.warp.antithetic ? ", antithetic" : "") +
+                (base_.control_variate ? ", control variate" : "");
+    }
+
+    MethodDerivative derivative(const Scene& scene, const Parameters& params, const MethodRun& run) override {
+        return one_term_derivative(was_derivative(scene, params, run_options(base_, scene, run, run.batches)),
+                                   "warped-area", name_);
+    }
+
+    MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                            const MethodRun& run) override {
+        const WasOptions o = run_options(base_, scene, run, 1);
+        return method_gradient(was_gradient(scene, params, adjoint, o), name_);
+    }
+
+  private:
+    WasOptions base_;
+    std::string name_;
+};
+
+} // namespace
+
+MethodInfo was_method_info() {
+    using Type = MethodOption::Type;
+    return {
+        "was",
+        "warped-area sampling of paper 004: boundary derivatives from auxiliary rays at every path vertex, "
+        "no edge sampling (surfaces)",
+        {{"was-unbiased",
+          Type::Bool,
+          "Russian-roulette debiasing of the warp's normalization (Algorithm 3) instead of a fixed N'",
+          {}},
+         {"was-aux",
+          Type::Int,
+          "auxiliary rays per warped direction N' (default 32; the paper's 8 is biased, "
+          "docs/warped-area-sampling.md)",
+          {},
+          2,
+          4096},
+         {"was-kappa",
+          Type::Float,
+          "concentration of the vMF auxiliary rays and of the harmonic weights' distance (default 1e4, the "
+          "paper's; larger: less bias, heavier tails)",
+          {},
+          1.0,
+          1e8},
+         {"no-antithetic", Type::Bool, "independent auxiliary samples instead of antithetic pairs", {}},
+         {"no-control-variate", Type::Bool, "no control variate for the pixel filter's gradient term", {}}},
+        [](const MethodOptions& o) { return std::make_unique<WasMethod>(o); }};
+}
+
+} // namespace penumbra
