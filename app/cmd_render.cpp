@@ -5,6 +5,7 @@
 #include "render/integrator.h"
 #include "render/light_medium.h"
 #include "render/render.h"
+#include "scene/factory.h"
 #include "scene/medium.h"
 #include "scene/scene.h"
 
@@ -22,9 +23,10 @@ int cmd_render(const std::string& scene_path, const std::string& output, int spp
     auto scene = load_scene(scene_path, parse_defines(defines));
     scene->select_sensor(sensor);
     if (!integrator.empty()) {
-        auto obj = make_integrator(Properties(integrator, SourceLocation{"--integrator", 0}), LoadContext{});
+        auto obj =
+            make_integrator_settings(Properties(integrator, SourceLocation{"--integrator", 0}), LoadContext{});
         obj->plugin = integrator;
-        scene->integrator = std::static_pointer_cast<Integrator>(obj);
+        scene->integrator = std::static_pointer_cast<const IntegratorSettings>(obj);
     }
     // As in Mitsuba, surface integrators render a scene with media as if it had none: say so.
     const std::string& used = scene->integrator->plugin;

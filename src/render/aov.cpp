@@ -7,46 +7,10 @@
 // | (nested)  | integrator | none    | optional integrator whose image becomes the first layer               |
 #include "render/aov.h"
 
-#include <sstream>
-
 namespace penumbra {
 
-namespace {
-AOVIntegrator::Type parse_type(const Properties& props, const std::string& type) {
-    using T = AOVIntegrator::Type;
-    static const std::pair<const char*, T> table[] = {
-        {"depth", T::Depth},         {"position", T::Position},       {"uv", T::UV},
-        {"geo_normal", T::GeoNormal}, {"sh_normal", T::ShNormal},     {"albedo", T::Albedo},
-        {"prim_index", T::PrimIndex}, {"shape_index", T::ShapeIndex}};
-    for (const auto& [name, t] : table)
-        if (type == name) return t;
-    props.raise("aovs", "unknown AOV type '" + type +
-                            "' (expected depth, position, uv, geo_normal, sh_normal, albedo, prim_index or shape_index)");
-}
-
-std::string trim(const std::string& s) {
-    const size_t a = s.find_first_not_of(" \t\n"), b = s.find_last_not_of(" \t\n");
-    return a == std::string::npos ? std::string() : s.substr(a, b - a + 1);
-}
-} // namespace
-
-AOVIntegrator::AOVIntegrator(const Properties& props) {
-    std::stringstream list(props.get_string("aovs"));
-    std::string item;
-    while (std::getline(list, item, ',')) {
-        item = trim(item);
-        const size_t colon = item.find(':');
-        if (colon == std::string::npos || colon == 0)
-            props.raise("aovs", "entry '" + item + "' is not of the form name:type");
-        aovs_.push_back({trim(item.substr(0, colon)), parse_type(props, trim(item.substr(colon + 1)))});
-    }
-    if (aovs_.empty()) props.raise("aovs", "no AOV given");
-    const auto nested = props.objects(ObjectKind::Integrator);
-    if (nested.size() > 1) props.raise("aovs", "at most one nested integrator is supported");
-    if (!nested.empty()) {
-        inner_ = std::dynamic_pointer_cast<SamplingIntegrator>(nested[0]);
-        if (!inner_) throw LoadError(nested[0]->location, "aov: the nested integrator must be camera-driven (path, direct)");
-    }
+AOVIntegrator::AOVIntegrator(const IntegratorSettings& settings) : aovs_(settings.aovs) {
+    if (!settings.nested.empty()) inner_ = make_sampling_integrator(*settings.nested[0].settings);
 }
 
 std::vector<std::string> AOVIntegrator::layer_names() const {
@@ -58,8 +22,8 @@ std::vector<std::string> AOVIntegrator::layer_names() const {
 
 namespace {
 // Mitsuba's channel letters per AOV type (the values are the first components of each layer's colors).
-const char* channel_letters(AOVIntegrator::Type type) {
-    using T = AOVIntegrator::Type;
+const char* channel_letters(AOVType type) {
+    using T = AOVType;
     switch (type) {
     case T::Depth:
         return "T";
@@ -87,17 +51,18 @@ std::vector<std::string> AOVIntegrator::layer_channels() const {
 void AOVIntegrator::sample(const Scene& scene, Sampler& sampler, const Ray& ray, Color3f* out, RayCounter& rays) const {
     if (inner_) inner_->sample(scene, sampler, ray, out++, rays);
     const SurfaceInteraction3f si = scene.intersect(ray);
+    using T = AOVType;
     for (const auto& a : aovs_) {
         Color3f v(0.f);
         if (si.is_valid()) switch (a.type) {
-            case Type::Depth: v = Color3f(si.t); break;
-            case Type::Position: v = si.p; break;
-            case Type::UV: v = Color3f(si.uv.x, si.uv.y, 0.f); break;
-            case Type::GeoNormal: v = si.n; break;
-            case Type::ShNormal: v = si.sh_frame.n; break;
-            case Type::Albedo: v = si.bsdf() ? si.bsdf()->eval_diffuse_reflectance(si) : Color3f(0.f); break;
-            case Type::PrimIndex: v = Color3f(float(si.prim_index)); break;
-            case Type::ShapeIndex: {
+            case T::Depth: v = Color3f(si.t); break;
+            case T::Position: v = si.p; break;
+            case T::UV: v = Color3f(si.uv.x, si.uv.y, 0.f); break;
+            case T::GeoNormal: v = si.n; break;
+            case T::ShNormal: v = si.sh_frame.n; break;
+            case T::Albedo: v = si.bsdf() ? si.bsdf()->eval_diffuse_reflectance(si) : Color3f(0.f); break;
+            case T::PrimIndex: v = Color3f(float(si.prim_index)); break;
+            case T::ShapeIndex: {
                 float index = 0.f;
                 for (size_t i = 0; i < scene.shapes.size(); ++i)
                     if (scene.shapes[i].get() == si.shape) index = float(i);

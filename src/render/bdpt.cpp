@@ -33,29 +33,6 @@
 
 namespace penumbra {
 
-BidirectionalPathTracer::BidirectionalPathTracer(const Properties& props) {
-    settings_.max_depth = int(props.get_int("max_depth", -1));
-    settings_.rr_depth = int(props.get_int("rr_depth", 5));
-    settings_.hide_emitters = props.get_bool("hide_emitters", false);
-    const std::string heuristic = props.get_string("heuristic", "power");
-    if (heuristic == "power")
-        settings_.heuristic = MISHeuristic::Power;
-    else if (heuristic == "balance")
-        settings_.heuristic = MISHeuristic::Balance;
-    else
-        props.raise("heuristic", "'heuristic' must be 'power' or 'balance', got '" + heuristic + "'");
-    settings_.strategy_s = int(props.get_int("strategy_s", -1));
-    settings_.strategy_t = int(props.get_int("strategy_t", -1));
-    if ((settings_.strategy_s < 0) != (settings_.strategy_t < 0))
-        props.raise(settings_.strategy_s < 0 ? "strategy_s" : "strategy_t",
-                    "'strategy_s' and 'strategy_t' select one strategy together");
-    if (settings_.strategy_t == 0 || (settings_.strategy_s == 0 && settings_.strategy_t == 1))
-        props.raise("strategy_t", "'strategy_t' must be >= 1 (camera vertices), with s + t >= 2");
-    if (settings_.max_depth < -1)
-        props.raise("max_depth", "'max_depth' must be -1 (infinite) or non-negative");
-    if (settings_.rr_depth <= 0) props.raise("rr_depth", "'rr_depth' must be positive");
-}
-
 // Pixels are split into a fixed number of chunks, each with its own light-tracing film, summed in chunk
 // order: the image is bit-identical for a given seed whatever the thread count.
 std::vector<Layer> BidirectionalPathTracer::render(const Scene& scene, const RenderOptions& options,

@@ -10,17 +10,7 @@
 
 namespace penumbra {
 
-enum class MISHeuristic { Power, Balance };
-
 struct BDPTRecord; // render/bdpt_record.h
-
-struct BDPTSettings {
-    int max_depth = -1; // longest path in segments (-1: infinite)
-    int rr_depth = 5;
-    bool hide_emitters = false;
-    MISHeuristic heuristic = MISHeuristic::Power;
-    int strategy_s = -1, strategy_t = -1; // >= 0: only this strategy, unweighted (a view of one technique)
-};
 
 // What one sample's walks and connections share.
 struct BDPTContext {

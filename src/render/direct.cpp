@@ -14,24 +14,15 @@
 
 namespace penumbra {
 
-DirectIntegrator::DirectIntegrator(const Properties& props) {
-    const int64_t shading = props.get_int("shading_samples", 1);
-    emitter_samples_ = int(props.get_int("emitter_samples", shading));
-    bsdf_samples_ = int(props.get_int("bsdf_samples", shading));
-    hide_emitters_ = props.get_bool("hide_emitters", false);
-    if (emitter_samples_ < 0 || bsdf_samples_ < 0 || emitter_samples_ + bsdf_samples_ == 0)
-        props.raise("emitter_samples", "emitter_samples and bsdf_samples must be non-negative and not both zero");
-}
-
 // L = L_e + Σ_i w_lum f L_e / p_lum + Σ_j w_bsdf f L_e / p_bsdf, with sample-count-aware power heuristic weights.
 void DirectIntegrator::sample(const Scene& scene, Sampler& sampler, const Ray& ray, Color3f* out,
                               RayCounter& rays) const {
     const BSDFContext ctx{TransportMode::Radiance};
-    const float total = float(emitter_samples_ + bsdf_samples_);
-    const float frac_lum = emitter_samples_ / total, frac_bsdf = bsdf_samples_ / total;
+    const float total = float(settings_.emitter_samples + settings_.bsdf_samples);
+    const float frac_lum = settings_.emitter_samples / total, frac_bsdf = settings_.bsdf_samples / total;
     Color3f L(0.f);
     const SurfaceInteraction3f si = scene.intersect(ray);
-    if (!hide_emitters_)
+    if (!settings_.hide_emitters)
         for_each_emitter_hit(scene, Interaction3f(), ray.d, si, [&](const Emitter*, const Color3f& Le, float) { L += Le; });
     const BSDF* bsdf = si.is_valid() ? si.bsdf() : nullptr;
     if (!bsdf) {
@@ -40,17 +31,17 @@ void DirectIntegrator::sample(const Scene& scene, Sampler& sampler, const Ray& r
     }
 
     if (bsdf->has(BSDFSmooth))
-        for (int i = 0; i < emitter_samples_; ++i) {
+        for (int i = 0; i < settings_.emitter_samples; ++i) {
             const auto [ds, em_weight] = scene.sample_emitter_direction(si, sampler.next_2d(), true);
             ++rays.rays;
             if (is_black(em_weight)) continue;
             const Vec3f wo = si.to_local(ds.d);
             const Color3f f = bsdf->eval(ctx, si, wo);
             const float w = ds.delta ? 1.f : mis_power(ds.pdf * frac_lum, bsdf->pdf(ctx, si, wo) * frac_bsdf);
-            L += em_weight * f * (w / float(emitter_samples_));
+            L += em_weight * f * (w / float(settings_.emitter_samples));
         }
 
-    for (int j = 0; j < bsdf_samples_; ++j) {
+    for (int j = 0; j < settings_.bsdf_samples; ++j) {
         const float u1 = sampler.next_1d();
         const auto [bs, weight] = bsdf->sample(ctx, si, u1, sampler.next_2d());
         if (is_black(weight)) continue;
@@ -63,7 +54,7 @@ void DirectIntegrator::sample(const Scene& scene, Sampler& sampler, const Ray& r
             scene, si, d, si2,
             [&, &bs = bs, &weight = weight](const Emitter*, const Color3f& Le, float emitter_pdf) {
                 const float w = delta ? 1.f : mis_power(bs.pdf * frac_bsdf, emitter_pdf * frac_lum);
-                L += weight * Le * (w / float(bsdf_samples_));
+                L += weight * Le * (w / float(settings_.bsdf_samples));
             });
     }
     out[0] = L;

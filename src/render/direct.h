@@ -5,12 +5,11 @@ namespace penumbra {
 
 class DirectIntegrator final : public SamplingIntegrator {
 public:
-    explicit DirectIntegrator(const Properties& props);
+    explicit DirectIntegrator(const DirectSettings& settings) : settings_(settings) {}
     void sample(const Scene& scene, Sampler& sampler, const Ray& ray, Color3f* out, RayCounter& rays) const override;
 
 private:
-    int emitter_samples_ = 1, bsdf_samples_ = 1;
-    bool hide_emitters_ = false;
+    DirectSettings settings_;
 };
 
 } // namespace penumbra

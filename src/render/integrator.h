@@ -4,9 +4,9 @@
 #include "core/image.h"
 #include "core/sampler.h"
 #include "render/render.h"
-#include "scene/factory.h"
 #include "scene/scene.h"
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -20,9 +20,9 @@ struct Layer {
     std::string channels = "RGB";
 };
 
-class Integrator : public Object {
+class Integrator {
 public:
-    ObjectKind kind() const override { return ObjectKind::Integrator; }
+    virtual ~Integrator() = default;
     virtual std::vector<Layer> render(const Scene& scene, const RenderOptions& options, RenderStats& stats) const = 0;
 };
 
@@ -43,5 +43,10 @@ public:
     // Estimates the layers' values for one camera ray; writes layer_names().size() colors to `out`.
     virtual void sample(const Scene& scene, Sampler& sampler, const Ray& ray, Color3f* out, RayCounter& rays) const = 0;
 };
+
+// The integrator of a scene's <integrator> settings (render/integrator_factory.cpp).
+std::unique_ptr<Integrator> make_integrator(const IntegratorSettings& settings);
+// The same for a camera-driven integrator (camera_driven(settings.plugin)); null for the others.
+std::unique_ptr<SamplingIntegrator> make_sampling_integrator(const IntegratorSettings& settings);
 
 } // namespace penumbra

@@ -6,22 +6,27 @@
 #include "render/ptracer.h"
 #include "render/sppm.h"
 #include "render/volpath.h"
-#include "scene/factory.h"
 
 namespace penumbra {
 
-std::shared_ptr<Object> make_integrator(const Properties& props, const LoadContext&) {
-    const std::string& type = props.plugin();
-    if (type == "path") return std::make_shared<PathIntegrator>(props);
-    if (type == "direct") return std::make_shared<DirectIntegrator>(props);
-    if (type == "bdpt") return std::make_shared<BidirectionalPathTracer>(props);
-    if (type == "ptracer") return std::make_shared<ParticleTracer>(props);
-    if (type == "volpath") return std::make_shared<VolPathIntegrator>(props, SpectralMIS::PerSegment);
-    if (type == "volpathmis") return std::make_shared<VolPathIntegrator>(props, SpectralMIS::PerPath);
-    if (type == "sppm") return std::make_shared<SPPMIntegrator>(props);
-    if (type == "aov") return std::make_shared<AOVIntegrator>(props);
-    if (type == "moment") return std::make_shared<MomentIntegrator>(props);
-    throw_unsupported_plugin(props, ObjectKind::Integrator);
+std::unique_ptr<SamplingIntegrator> make_sampling_integrator(const IntegratorSettings& settings) {
+    const std::string& type = settings.plugin;
+    if (type == "path") return std::make_unique<PathIntegrator>(settings.path);
+    if (type == "direct") return std::make_unique<DirectIntegrator>(settings.direct);
+    if (type == "volpath") return std::make_unique<VolPathIntegrator>(settings.path, SpectralMIS::PerSegment);
+    if (type == "volpathmis") return std::make_unique<VolPathIntegrator>(settings.path, SpectralMIS::PerPath);
+    if (type == "aov") return std::make_unique<AOVIntegrator>(settings);
+    if (type == "moment") return std::make_unique<MomentIntegrator>(settings);
+    return nullptr;
+}
+
+std::unique_ptr<Integrator> make_integrator(const IntegratorSettings& settings) {
+    if (std::unique_ptr<SamplingIntegrator> sampling = make_sampling_integrator(settings)) return sampling;
+    const std::string& type = settings.plugin;
+    if (type == "bdpt") return std::make_unique<BidirectionalPathTracer>(settings.bdpt);
+    if (type == "ptracer") return std::make_unique<ParticleTracer>(settings.path);
+    if (type == "sppm") return std::make_unique<SPPMIntegrator>(settings.sppm);
+    throw Error("internal error: no integrator for the settings of '" + type + "'");
 }
 
 } // namespace penumbra

@@ -1,24 +1,26 @@
 #include "render/integrator_settings.h"
 
-#include "render/bdpt.h"
-#include "render/path.h"
-#include "render/volpath.h"
-
 namespace penumbra {
 
+namespace {
+bool integrator_is(const Scene& scene, const char* plugin) {
+    return scene.integrator && scene.integrator->plugin == plugin;
+}
+} // namespace
+
 PathSettings path_settings(const Scene& scene) {
-    if (const auto* path = dynamic_cast<const PathIntegrator*>(scene.integrator.get())) return path->settings();
-    if (const auto* volpath = dynamic_cast<const VolPathIntegrator*>(scene.integrator.get())) return volpath->settings();
-    if (const auto* bdpt = dynamic_cast<const BidirectionalPathTracer*>(scene.integrator.get())) {
-        const BDPTSettings& b = bdpt->settings();
+    if (integrator_is(scene, "path") || integrator_is(scene, "volpath") || integrator_is(scene, "volpathmis"))
+        return scene.integrator->path;
+    if (scene_integrator_is_bdpt(scene)) {
+        const BDPTSettings& b = scene.integrator->bdpt;
         return PathSettings{b.max_depth, b.rr_depth, b.hide_emitters};
     }
     return PathSettings{};
 }
 
 BDPTSettings bdpt_settings(const Scene& scene, const PathSettings& path) {
-    if (const auto* bdpt = dynamic_cast<const BidirectionalPathTracer*>(scene.integrator.get())) {
-        BDPTSettings s = bdpt->settings();
+    if (scene_integrator_is_bdpt(scene)) {
+        BDPTSettings s = scene.integrator->bdpt;
         s.strategy_s = s.strategy_t = -1;
         return s;
     }
@@ -29,13 +31,10 @@ BDPTSettings bdpt_settings(const Scene& scene, const PathSettings& path) {
     return s;
 }
 
-bool scene_integrator_is_bdpt(const Scene& scene) {
-    return dynamic_cast<const BidirectionalPathTracer*>(scene.integrator.get()) != nullptr;
-}
+bool scene_integrator_is_bdpt(const Scene& scene) { return integrator_is(scene, "bdpt"); }
 
 const SPPMSettings* sppm_settings(const Scene& scene) {
-    const auto* sppm = dynamic_cast<const SPPMIntegrator*>(scene.integrator.get());
-    return sppm ? &sppm->settings() : nullptr;
+    return integrator_is(scene, "sppm") ? &scene.integrator->sppm : nullptr;
 }
 
 } // namespace penumbra

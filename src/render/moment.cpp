@@ -13,15 +13,11 @@
 
 namespace penumbra {
 
-MomentIntegrator::MomentIntegrator(const Properties& props) {
-    props.objects(ObjectKind::Integrator); // marks them queried; names come from all_objects()
+MomentIntegrator::MomentIntegrator(const IntegratorSettings& settings) {
     names_.push_back("");
     channels_.push_back("RGB");
-    for (const auto& [name, object] : props.all_objects()) {
-        auto nested = std::dynamic_pointer_cast<SamplingIntegrator>(object);
-        if (!nested)
-            throw LoadError(object->location, "moment: nested integrator '" + object->plugin +
-                                                  "' must be camera-driven (path, direct, aov, moment)");
+    for (const auto& [name, nested_settings] : settings.nested) {
+        std::shared_ptr<SamplingIntegrator> nested = make_sampling_integrator(*nested_settings);
         const std::vector<std::string> names = nested->layer_names(), channels = nested->layer_channels();
         Nested entry{nested, {}};
         for (size_t l = 0; l < names.size(); ++l) {
@@ -35,8 +31,6 @@ MomentIntegrator::MomentIntegrator(const Properties& props) {
         channels_.push_back("XYZ");
         nested_.push_back(std::move(entry));
     }
-    if (nested_.empty())
-        throw LoadError(props.location(), "moment: at least one nested integrator is required");
     first_moments_ = names_.size() - 1;
     for (size_t l = 1; l <= first_moments_; ++l) {
         names_.push_back("m2_" + names_[l]);

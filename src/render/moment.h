@@ -5,7 +5,8 @@ namespace penumbra {
 
 class MomentIntegrator final : public SamplingIntegrator {
   public:
-    explicit MomentIntegrator(const Properties& props);
+    // The `moment` settings: its nested integrators.
+    explicit MomentIntegrator(const IntegratorSettings& settings);
     std::vector<std::string> layer_names() const override { return names_; }
     std::vector<std::string> layer_channels() const override { return channels_; }
     void sample(const Scene& scene, Sampler& sampler, const Ray& ray, Color3f* out,

@@ -12,14 +12,6 @@
 
 namespace penumbra {
 
-PathIntegrator::PathIntegrator(const Properties& props) {
-    settings_.max_depth = int(props.get_int("max_depth", -1));
-    settings_.rr_depth = int(props.get_int("rr_depth", 5));
-    settings_.hide_emitters = props.get_bool("hide_emitters", false);
-    if (settings_.max_depth < -1) props.raise("max_depth", "must be -1 (infinite) or non-negative");
-    if (settings_.rr_depth <= 0) props.raise("rr_depth", "must be positive");
-}
-
 void PathIntegrator::sample(const Scene& scene, Sampler& sampler, const Ray& primary, Color3f* out,
                             RayCounter& rays) const {
     const SurfaceInteraction3f first = scene.intersect(primary);

@@ -6,9 +6,8 @@ namespace penumbra {
 
 class PathIntegrator final : public SamplingIntegrator {
 public:
-    explicit PathIntegrator(const Properties& props);
+    explicit PathIntegrator(const PathSettings& settings) : settings_(settings) {}
     void sample(const Scene& scene, Sampler& sampler, const Ray& ray, Color3f* out, RayCounter& rays) const override;
-    const PathSettings& settings() const { return settings_; }
 
 private:
     PathSettings settings_;

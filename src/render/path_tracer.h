@@ -17,12 +17,6 @@
 
 namespace penumbra {
 
-struct PathSettings {
-    int max_depth = -1; // -1: infinite; 1: directly visible emitters only
-    int rr_depth = 5;
-    bool hide_emitters = false;
-};
-
 // v / detach(v): 1 with a derivative (the relative change of a quantity away from the reference configuration).
 template <typename T> inline T relative_change(const T& v) {
     if constexpr (std::is_same_v<T, float>) return 1.f;

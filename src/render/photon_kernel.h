@@ -3,10 +3,9 @@
 // ∫_disc K(|x| / r) / (π r²) dA = 1, so that the estimate is Σ_p K(t_p) Φ_p f_p / (π r²) whatever the kernel.
 // Templated on the scalar type so that the differentiable photon-mapping estimators evaluate the same code.
 #pragma once
+#include "scene/integrator_settings.h"
 
 namespace penumbra {
-
-enum class PhotonKernel { Constant, Smooth };
 
 // 1 (constant) or smooth_scale (1 - 6t⁵ + 15t⁴ - 10t³) (smooth) for t < 1, else 0: the kernels below with
 // their normalization.

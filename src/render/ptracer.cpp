@@ -40,14 +40,6 @@ bool survives_roulette(Color3f& throughput, Sampler& sampler) {
 
 } // namespace
 
-ParticleTracer::ParticleTracer(const Properties& props) {
-    max_depth_ = int(props.get_int("max_depth", -1));
-    rr_depth_ = int(props.get_int("rr_depth", 5));
-    hide_emitters_ = props.get_bool("hide_emitters", false);
-    if (max_depth_ < -1) props.raise("max_depth", "must be -1 (infinite) or non-negative");
-    if (rr_depth_ <= 0) props.raise("rr_depth", "must be positive");
-}
-
 void ParticleTracer::trace(const Scene& scene, bool media, Sampler& sampler, Image& image, RayCounter& rays) const {
     const BSDFContext ctx{TransportMode::Importance};
     const Sensor& sensor = *scene.sensor;
@@ -68,8 +60,8 @@ void ParticleTracer::trace(const Scene& scene, bool media, Sampler& sampler, Ima
         const Color3f tr = segment_transmittance(scene, ref.spawn_ray_to(sds.p), medium, sampler, rays);
         if (!is_black(tr)) splat(sds.uv, value * tr);
     };
-    const unsigned max_depth = unsigned(max_depth_);
-    if (max_depth_ == 0 || scene.emitters.empty()) return;
+    const unsigned max_depth = unsigned(settings_.max_depth);
+    if (settings_.max_depth == 0 || scene.emitters.empty()) return;
 
     float u_sel = sampler.next_1d(), pdf_sel = 0.f;
     const Emitter* emitter = scene.sample_emitter(u_sel, pdf_sel);
@@ -77,7 +69,7 @@ void ParticleTracer::trace(const Scene& scene, bool media, Sampler& sampler, Ima
     // Depth 1: the emitter seen directly by the camera, I = ∫ W_e L_e Tr |cos θ_x| / d² dA (area emitters only:
     // point and directional emitters occupy no area on the film).
     const Vec2f u_pos = sampler.next_2d();
-    if (!hide_emitters_ && emitter->shape()) {
+    if (!settings_.hide_emitters && emitter->shape()) {
         const PositionSample3f ps = emitter->shape()->sample_position(u_pos);
         SurfaceInteraction3f si;
         si.p = ps.p;
@@ -125,7 +117,7 @@ void ParticleTracer::trace(const Scene& scene, bool media, Sampler& sampler, Ima
                 if (!(pdf > 0.f)) break;
                 ray = Ray(ff.p, wo);
                 ++rays.rays;
-                if (depth >= unsigned(rr_depth_) && !survives_roulette(throughput, sampler)) break;
+                if (depth >= unsigned(settings_.rr_depth) && !survives_roulette(throughput, sampler)) break;
                 ++depth;
                 continue;
             }
@@ -154,7 +146,7 @@ void ParticleTracer::trace(const Scene& scene, bool media, Sampler& sampler, Ima
         ray = si.spawn_ray(d);
         ++rays.rays;
         if (null) continue;
-        if (depth >= unsigned(rr_depth_) && !survives_roulette(throughput, sampler)) break;
+        if (depth >= unsigned(settings_.rr_depth) && !survives_roulette(throughput, sampler)) break;
         ++depth;
     }
 }

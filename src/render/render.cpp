@@ -10,8 +10,8 @@ std::vector<Layer> render_layers(const Scene& scene, const RenderOptions& option
     if (options.spp < 0) throw Error("render: the sample count must be positive");
     RenderStats local;
     RenderStats& s = stats ? *stats : local;
-    if (scene.integrator) return scene.integrator->render(scene, options, s);
-    return PathIntegrator(Properties("path", {})).render(scene, options, s);
+    if (scene.integrator) return make_integrator(*scene.integrator)->render(scene, options, s);
+    return PathIntegrator(PathSettings{}).render(scene, options, s);
 }
 
 Image render(const Scene& scene, const RenderOptions& options, RenderStats* stats) {

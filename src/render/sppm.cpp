@@ -33,36 +33,6 @@
 
 namespace penumbra {
 
-SPPMIntegrator::SPPMIntegrator(const Properties& props) {
-    s_.photon_count = props.get_int("photon_count", 250000);
-    s_.initial_radius = props.get_float("initial_radius", 0.f);
-    s_.alpha = props.get_float("alpha", 0.7f);
-    s_.max_depth = int(props.get_int("max_depth", -1));
-    s_.rr_depth = int(props.get_int("rr_depth", 5));
-    s_.granularity = props.get_int("granularity", 0);
-    s_.max_passes = props.get_int("max_passes", -1);
-    const std::string kernel = props.get_string("kernel", "constant");
-    if (kernel == "constant")
-        s_.kernel = PhotonKernel::Constant;
-    else if (kernel == "smooth")
-        s_.kernel = PhotonKernel::Smooth;
-    else
-        props.raise("kernel", "'kernel' must be 'constant' or 'smooth', got '" + kernel + "'");
-    if (s_.photon_count <= 0 || s_.photon_count > (int64_t(1) << 31))
-        props.raise("photon_count",
-                    "'photon_count' must be positive (at most 2^31), got " + std::to_string(s_.photon_count));
-    if (!(s_.initial_radius >= 0.f) || !std::isfinite(s_.initial_radius))
-        props.raise("initial_radius",
-                    "'initial_radius' must be >= 0 (0: automatic), got " + std::to_string(s_.initial_radius));
-    if (!(s_.alpha > 0.f && s_.alpha <= 1.f))
-        props.raise("alpha", "'alpha' must be in (0, 1], got " + std::to_string(s_.alpha));
-    if (s_.max_depth < -1) props.raise("max_depth", "'max_depth' must be -1 (infinite) or non-negative");
-    if (s_.rr_depth <= 0) props.raise("rr_depth", "'rr_depth' must be positive");
-    if (s_.granularity < 0) props.raise("granularity", "'granularity' must be >= 0 (0: automatic)");
-    if (s_.max_passes == 0 || s_.max_passes < -1)
-        props.raise("max_passes", "'max_passes' must be positive or -1 (the sampler's sample count)");
-}
-
 float sppm_radius(const Scene& scene, const SPPMSettings& settings) {
     if (settings.initial_radius > 0.f) return settings.initial_radius;
     const Film& film = *scene.sensor->film;

@@ -17,17 +17,6 @@ struct SPPMPixel {
     Color3f volume_tau{0.f};
 };
 
-// The integrator's parameters (the table in sppm.cpp), which the differentiable photon-mapping estimators
-// (diff/dpm/dpm.h) read from a scene's `sppm` integrator.
-struct SPPMSettings {
-    int64_t photon_count = 250000;
-    float initial_radius = 0.f; // 0: automatic (sppm_radius)
-    float alpha = 0.7f;
-    int max_depth = -1, rr_depth = 5;
-    int64_t granularity = 0, max_passes = -1;
-    PhotonKernel kernel = PhotonKernel::Constant;
-};
-
 // The initial merging radius: `initial_radius`, or 5 × the scene's radius / max(width, height) for 0.
 float sppm_radius(const Scene& scene, const SPPMSettings& settings);
 // The photon pass of the settings on `threads` threads.
@@ -35,10 +24,9 @@ PhotonTracingSettings photon_tracing_settings(const SPPMSettings& settings, int 
 
 class SPPMIntegrator final : public Integrator {
   public:
-    explicit SPPMIntegrator(const Properties& props);
+    explicit SPPMIntegrator(const SPPMSettings& settings) : s_(settings) {}
     std::vector<Layer> render(const Scene& scene, const RenderOptions& options,
                               RenderStats& stats) const override;
-    const SPPMSettings& settings() const { return s_; }
 
   private:
     SPPMSettings s_;

@@ -7,10 +7,10 @@ namespace penumbra {
 // `volpath` (spectral MIS per free-flight segment) and `volpathmis` (spectral MIS over whole paths).
 class VolPathIntegrator final : public SamplingIntegrator {
   public:
-    VolPathIntegrator(const Properties& props, SpectralMIS spectral);
+    VolPathIntegrator(const PathSettings& settings, SpectralMIS spectral)
+        : settings_(settings), spectral_(spectral) {}
     void sample(const Scene& scene, Sampler& sampler, const Ray& ray, Color3f* out,
                 RayCounter& rays) const override;
-    const PathSettings& settings() const { return settings_; }
 
   private:
     PathSettings settings_;

@@ -27,7 +27,8 @@ std::shared_ptr<Object> make_sampler(const Properties& props, const LoadContext&
 std::shared_ptr<Object> make_medium(const Properties& props, const LoadContext& ctx);
 std::shared_ptr<Object> make_phase(const Properties& props, const LoadContext& ctx);
 std::shared_ptr<Object> make_volume(const Properties& props, const LoadContext& ctx);
-std::shared_ptr<Object> make_integrator(const Properties& props, const LoadContext& ctx);
+// The <integrator>'s settings record (scene/integrator_settings.h).
+std::shared_ptr<Object> make_integrator_settings(const Properties& props, const LoadContext& ctx);
 
 // "file:line: unsupported <kind> plugin '<type>'" (one clear line).
 [[noreturn]] void throw_unsupported_plugin(const Properties& props, ObjectKind kind);

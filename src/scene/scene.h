@@ -1,6 +1,7 @@
 // The scene: shapes in an Embree BVH, emitters, the sensor and the integrator description.
 #pragma once
 #include "scene/emitter.h"
+#include "scene/integrator_settings.h"
 #include "scene/medium.h"
 #include "scene/sensor.h"
 #include "scene/shape.h"
@@ -12,8 +13,6 @@
 #include <vector>
 
 namespace penumbra {
-
-class Integrator;
 
 class Scene {
 public:
@@ -27,7 +26,8 @@ public:
     std::vector<std::shared_ptr<Emitter>> emitters; // all emitters, area emitters included
     std::shared_ptr<Sensor> sensor;                 // the sensor rendered: sensors[0] unless selected
     std::vector<std::shared_ptr<Sensor>> sensors; // every sensor, in declaration order (Mitsuba's sensors())
-    std::shared_ptr<Integrator> integrator;
+    // The <integrator>'s settings (default: path); render() makes the integrator object from them.
+    std::shared_ptr<const IntegratorSettings> integrator;
     // Every object with an `id`, for parameter lookup and `info`.
     std::map<std::string, std::shared_ptr<Object>> named_objects;
     std::string source_path;

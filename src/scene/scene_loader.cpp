@@ -3,7 +3,6 @@
 // factory, then a check that every declared parameter was understood. The scene keeps top-level shapes (and
 // their area emitters), emitters, the sensors (default: one perspective) and the integrator (default:
 // path).
-#include "render/integrator.h"
 #include "scene/factory.h"
 #include "scene/scene.h"
 #include "scene/xml_parser.h"
@@ -34,7 +33,7 @@ Factory factory_for(ObjectKind kind) {
     case ObjectKind::Sampler:
         return make_sampler;
     case ObjectKind::Integrator:
-        return make_integrator;
+        return make_integrator_settings;
     case ObjectKind::Medium:
         return make_medium;
     case ObjectKind::Phase:
@@ -137,7 +136,7 @@ std::unique_ptr<Scene> build_scene(const XmlScene& xml, const std::string& sourc
                 throw LoadError(child.location,
                                 "only one <integrator> may be specified per scene (the first is at " +
                                     scene->integrator->location.str() + ")");
-            scene->integrator = as<Integrator>(obj, ObjectKind::Integrator);
+            scene->integrator = as<const IntegratorSettings>(obj, ObjectKind::Integrator);
             break;
         default:
             break; // BSDFs, textures, media, ... declared at the top level for later <ref>s (as in Mitsuba)
@@ -161,7 +160,7 @@ std::unique_ptr<Scene> build_scene(const XmlScene& xml, const std::string& sourc
         auto obj = inst.create(ObjectKind::Integrator, Properties("path", xml.location));
         obj->plugin = "path";
         obj->location = xml.location;
-        scene->integrator = as<Integrator>(obj, ObjectKind::Integrator);
+        scene->integrator = as<const IntegratorSettings>(obj, ObjectKind::Integrator);
     }
     scene->build();
     return scene;
