@@ -24,16 +24,6 @@ struct WarContext {
           boundary(s), field{s, p, form, boundary, o.field}, settings(o.path) {}
 };
 
-// The radiance of the infinite emitters along the escaped direction d warped on the sphere (value d, tangent
-// V).
-Color3<Var> environment(const WarContext& c, const Vec3f& d, const Vec3<Var>& warped) {
-    Color3<Var> L(Var(0.f));
-    for (const auto& e : c.scene.emitters)
-        if (e->is_infinite() && !e->is_delta())
-            L += e->eval_environment(c.form.direction_to_reference_light(*e, d) + (warped - Vec3<Var>(d)));
-    return L;
-}
-
 // The vertex rule of the unidirectional estimator (render/path_tracer.h; Algorithm 2 lines 6–17): every vertex
 // warped by the field conditioned on its detector-side neighbour as it is sampled, p(θ) = p + (θ − θ0) v(p)
 // with the factor 1 + (θ − θ0) ∇·v in its area Jacobian.
@@ -50,7 +40,7 @@ struct WarRule {
 
     Color3<Var> emitted(const Emitter& e, const Color3f&, const SurfaceInteraction3f& hit,
                         const SurfaceInteraction<Var>& si, const Vec3f& d) const {
-        return hit.is_valid() ? e.eval(si) : environment(c, d, escaped);
+        return hit.is_valid() ? e.eval(si) : c.form.environment(c.scene, d, escaped);
     }
 
     // Next-event estimation at the detector vertex p^D_n (Algorithm 2 lines 7–10): the light vertex p^S_n

@@ -53,15 +53,6 @@ struct WasContext {
     }
 };
 
-// Radiance of the infinite emitters along the warped escaped direction (value d, derivative V).
-Color3<Var> environment(const WasContext& c, const Vec3f& d, const Vec3<Var>& warped) {
-    Color3<Var> L(Var(0.f));
-    for (const auto& e : c.scene.emitters)
-        if (e->is_infinite() && !e->is_delta())
-            L += e->eval_environment(c.form.direction_to_reference_light(*e, d) + (warped - Vec3<Var>(d)));
-    return L;
-}
-
 // The warp of direction ω at the surface vertex `hit` (x(θ) = si.p): Algorithm 2 or 3 with vMF auxiliary
 // rays.
 WarpEstimate warp_at(const WasContext& c, const SurfaceInteraction3f& hit, const SurfaceInteraction<Var>& si,
@@ -87,7 +78,7 @@ struct WasRule {
 
     Color3<Var> emitted(const Emitter& e, const Color3f&, const SurfaceInteraction3f& hit,
                         const SurfaceInteraction<Var>& si, const Vec3f& d) const {
-        return hit.is_valid() ? e.eval(si) : environment(c, d, direction);
+        return hit.is_valid() ? e.eval(si) : c.form.environment(c.scene, d, direction);
     }
 
     // Next-event estimation at x in solid angle: f_s(ω(θ)) L_e(y(θ) → x) J / p_σ, with y(θ) where the warped
@@ -227,7 +218,7 @@ CameraSample camera_sample(const WasContext& c, Sampler& sampler, AuxiliaryRng& 
     const SurfaceInteraction3f first = c.scene.intersect(ray);
     Color3<Var> L(Var(0.f));
     if (!first.is_valid()) {
-        if (!c.settings.hide_emitters) L = environment(c, ray.d, direction);
+        if (!c.settings.hide_emitters) L = c.form.environment(c.scene, ray.d, direction);
     } else {
         SurfaceInteraction<Var> x1 = warped_vertex(c.params, first, c.form.camera_position(ray.o), direction);
         x1.wi = x1.to_local(-direction);
