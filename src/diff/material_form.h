@@ -216,6 +216,15 @@ public:
                 L += e->eval_environment(direction_to_reference_light(*e, d));
         return L;
     }
+    // The same along d warped on the sphere to `warped` (value d, tangent V: warped-area sampling and
+    // reparameterization).
+    Color3<Var> environment(const Scene& scene, const Vec3f& d, const Vec3<Var>& warped) const {
+        Color3<Var> L(Var(0.f));
+        for (const auto& e : scene.emitters)
+            if (e->is_infinite() && !e->is_delta())
+                L += e->eval_environment(direction_to_reference_light(*e, d) + (warped - Vec3<Var>(d)));
+        return L;
+    }
 
 private:
     MovedVertices vertices(const Shape& shape) const { return {shape, params_.motions(&shape)}; }

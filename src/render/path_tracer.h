@@ -1,12 +1,13 @@
-// Unidirectional path tracing with next-event estimation and MIS, written once for rendering (T = float on the
-// reference geometry) and for the interior term of the material-form differential path integral (T = Var on
-// the moving geometry, paper 001 §5.1).
+// Unidirectional path tracing with next-event estimation and MIS, the one surface path walk: written once for
+// rendering (T = float on the reference geometry), for the interior term of the material-form differential path
+// integral (T = Var on the moving geometry, paper 001 §5.1), and for warped-area sampling (paper 004) and
+// warped-area reparameterization (paper 000), each of which supplies its vertex rule (VertexRule below).
 //
 // Paths are always sampled with float arithmetic in the reference configuration (MIS weights and Russian
 // roulette are detached). The measurement contribution is written in area measure, f(x̄) ∏ J / p(x̄):
 // each segment contributes  f_s(x_{i-1} ← x_i → x_{i+1}) G'(x_i, x_{i+1}) J(x_{i+1}) / (p_σ G'_0),
 // with G' = |n_{i+1} · ω| / |x_{i+1} - x_i|² and p_σ the solid-angle density the sampler used. In the reference
-// configuration G'/G'_0 = J = 1 and this is the usual estimator; `Geometry` supplies x_i(θ) and J.
+// configuration G'/G'_0 = J = 1 and this is the usual estimator; the rule supplies x_i(θ) and J.
 #pragma once
 #include "render/emitter_hit.h"
 #include "render/integrator.h"
@@ -102,16 +103,30 @@ Color3<T> next_event_contribution(const BSDFContext& ctx, const BSDF* bsdf, cons
     return bsdf->eval(ctx, si, si.to_local(c.wo)) * c.value;
 }
 
+// A vertex rule of trace_path: how each vertex of a path sampled in the reference configuration is placed in T,
+// and what each contribution carries there. Rules are per path (they may keep the path's state):
+//   SurfaceInteraction<T> arrive(hit, prev)   the vertex `hit`, reached by BSDF sampling from `prev`, in T with
+//                                             its `wi` set (toward `prev`);
+//   Color3<T> emitted(e, Le, hit, si, d)       the radiance L_e of emitter e (float value Le) seen at `hit` (si in
+//                                             T), or the environment along d when `hit` is invalid;
+//   Color3<T> next_event(bsdf, hit, si, ds, em_weight, rays)   f_s L_e / p of the emitter sample ds
+//                                             (em_weight = L_e / p in the reference configuration);
+//   void scatter(bsdf, hit, si, bs, weight, d, next, delta, throughput, rays)   multiplies the throughput by the
+//                                             step's factor f_s G J / (G_0 p_σ) to `next` (invalid: escaped along
+//                                             d; weight = f/p in float, delta: a delta lobe was sampled).
+// The primal (T = float on the reference geometry) and paper 001's material-form interior term (T = Var on the
+// moving geometry) are GeometryRule; warped-area sampling (diff/was/warped_area.cpp) and warped-area
+// reparameterization (diff/war/war.cpp) warp the vertices with their fields.
+template <typename Rule>
+concept VertexRule = requires { &Rule::scatter; };
+
 // Radiance leaving the first vertex of a path toward the sensor, estimated along one sampled path. `first` is
 // the intersection of `primary` (traced by the caller) and `first_si` the same vertex in T with its `wi`
 // (toward the sensor) set; for T = float it is `first` itself.
-template <typename T, typename Geometry>
+template <typename T, VertexRule Rule>
 Color3<T> trace_path(const Scene& scene, Sampler& sampler, const Ray& primary, const SurfaceInteraction3f& first,
-                     const SurfaceInteraction<T>& first_si, const Geometry& geometry, const PathSettings& settings,
+                     const SurfaceInteraction<T>& first_si, Rule& rule, const PathSettings& settings,
                      RayCounter& rays) {
-    using std::abs;
-    using std::sqrt;
-    constexpr bool reference = std::is_same_v<T, float>;
     const BSDFContext ctx{TransportMode::Radiance};
     Color3<T> L(T(0)), throughput(T(1));
     if (settings.max_depth == 0) return L;
@@ -120,30 +135,17 @@ Color3<T> trace_path(const Scene& scene, Sampler& sampler, const Ray& primary, c
 
     Ray ray = primary;
     SurfaceInteraction3f hit = first, prev_hit;
-    Vec3<T> prev_position;
+    SurfaceInteraction<T> si = first_si;
     float prev_bsdf_pdf = 1.f;
     bool prev_bsdf_delta = true;
 
     for (unsigned depth = 0;; ++depth) {
         // Emission reached by BSDF sampling (or directly visible), MIS-weighted against emitter sampling.
-        SurfaceInteraction<T> si;
-        if (depth == 0) {
-            si = first_si;
-        } else if (hit.is_valid()) {
-            si = geometry.vertex(hit);
-            if constexpr (reference) si.wi = hit.wi;
-            else si.wi = si.to_local(normalize(prev_position - si.p));
-        }
+        if (depth > 0 && hit.is_valid()) si = rule.arrive(hit, si);
         if (!(depth == 0 && settings.hide_emitters)) {
             for_each_emitter_hit(scene, prev_hit, ray.d, hit, [&](const Emitter* e, const Color3f& Le, float emitter_pdf) {
                 const float w = prev_bsdf_delta ? 1.f : mis_power(prev_bsdf_pdf, emitter_pdf);
-                if constexpr (reference) L += throughput * Le * w;
-                else
-                    L += throughput *
-                         (hit.is_valid()
-                              ? e->eval(si)
-                              : e->eval_environment(geometry.direction_to_reference_light(*e, ray.d))) *
-                         T(w);
+                L += throughput * rule.emitted(*e, Le, hit, si, ray.d) * T(w);
             });
         }
         if (!hit.is_valid() || depth + 1 >= max_depth) break;
@@ -155,13 +157,7 @@ Color3<T> trace_path(const Scene& scene, Sampler& sampler, const Ray& primary, c
             const auto [ds, em_weight] = scene.sample_emitter_direction(hit, sampler.next_2d(), true);
             ++rays.rays;
             if (!is_black(em_weight)) {
-                Color3<T> contribution;
-                if constexpr (reference) {
-                    // In the reference configuration the emitter's sampling weight L_e/p is this same quantity.
-                    contribution = bsdf->eval(ctx, si, si.to_local(ds.d)) * em_weight;
-                } else {
-                    contribution = next_event_contribution(ctx, bsdf, si, ds, geometry);
-                }
+                const Color3<T> contribution = rule.next_event(*bsdf, hit, si, ds, em_weight, rays);
                 const float w = ds.delta ? 1.f : mis_power(ds.pdf, bsdf->pdf(ctx, hit, hit.to_local(ds.d)));
                 L += throughput * contribution * T(w);
             }
@@ -178,7 +174,51 @@ Color3<T> trace_path(const Scene& scene, Sampler& sampler, const Ray& primary, c
         ++rays.rays;
         const SurfaceInteraction3f next = scene.intersect(ray);
         const bool delta = (bs.sampled_type & BSDFDelta) != 0;
+        rule.scatter(*bsdf, hit, si, bs, weight, d, next, delta, throughput, rays);
+        eta *= bs.eta;
+        prev_hit = hit;
+        prev_bsdf_pdf = bs.pdf;
+        prev_bsdf_delta = delta;
+        hit = next;
 
+        if (depth + 1 >= unsigned(settings.rr_depth) && !survives_roulette(throughput, eta, sampler)) break;
+    }
+    return L;
+}
+
+// The vertex rule of a Geometry (paper 001 §5.1): vertices are the material points of the sampled hits placed by
+// the geometry x(p, θ), with the area Jacobian J; T = float on ReferenceGeometry is the primal estimator.
+template <typename T, typename Geometry> struct GeometryRule {
+    static constexpr bool reference = std::is_same_v<T, float>;
+    const Geometry& geometry;
+
+    SurfaceInteraction<T> arrive(const SurfaceInteraction3f& hit, const SurfaceInteraction<T>& prev) const {
+        SurfaceInteraction<T> si = geometry.vertex(hit);
+        if constexpr (reference) si.wi = hit.wi;
+        else si.wi = si.to_local(normalize(prev.p - si.p));
+        return si;
+    }
+
+    Color3<T> emitted(const Emitter& e, const Color3f& Le, const SurfaceInteraction3f& hit,
+                      const SurfaceInteraction<T>& si, const Vec3f& d) const {
+        if constexpr (reference) return Le;
+        else return hit.is_valid() ? e.eval(si) : e.eval_environment(geometry.direction_to_reference_light(e, d));
+    }
+
+    Color3<T> next_event(const BSDF& bsdf, const SurfaceInteraction3f&, const SurfaceInteraction<T>& si,
+                         const DirectionSample3f& ds, const Color3f& em_weight, RayCounter&) const {
+        const BSDFContext ctx{TransportMode::Radiance};
+        // In the reference configuration the emitter's sampling weight L_e/p is this same quantity.
+        if constexpr (reference) return bsdf.eval(ctx, si, si.to_local(ds.d)) * em_weight;
+        else return next_event_contribution(ctx, &bsdf, si, ds, geometry);
+    }
+
+    void scatter(const BSDF& bsdf, const SurfaceInteraction3f&, const SurfaceInteraction<T>& si,
+                 const BSDFSample& bs, const Color3f& weight, const Vec3f& d, const SurfaceInteraction3f& next,
+                 bool delta, Color3<T>& throughput, RayCounter&) const {
+        using std::abs;
+        using std::sqrt;
+        const BSDFContext ctx{TransportMode::Radiance};
         if (delta || reference) {
             // Reference: weight = f/p. Delta lobes fix the direction (the paper's assumption A.1 excludes them:
             // no derivative flows through them).
@@ -189,20 +229,21 @@ Color3<T> trace_path(const Scene& scene, Sampler& sampler, const Ray& primary, c
             const T dist2 = squared_norm(to_next);
             const Vec3<T> wo = to_next / sqrt(dist2);
             const T g = abs(dot(x2.n, wo)) / dist2;
-            throughput *= bsdf->eval(ctx, si, si.to_local(wo)) * (relative_change(g * geometry.jacobian(next)) / T(bs.pdf));
+            throughput *= bsdf.eval(ctx, si, si.to_local(wo)) * (relative_change(g * geometry.jacobian(next)) / T(bs.pdf));
         } else {
-            throughput *= bsdf->eval(ctx, si, si.to_local(Vec3<T>(d))) / T(bs.pdf);
+            throughput *= bsdf.eval(ctx, si, si.to_local(Vec3<T>(d))) / T(bs.pdf);
         }
-        eta *= bs.eta;
-        prev_hit = hit;
-        prev_position = si.p;
-        prev_bsdf_pdf = bs.pdf;
-        prev_bsdf_delta = delta;
-        hit = next;
-
-        if (depth + 1 >= unsigned(settings.rr_depth) && !survives_roulette(throughput, eta, sampler)) break;
     }
-    return L;
+};
+
+// trace_path with the vertex rule of a Geometry (ReferenceGeometry for the primal, MaterialForm on the tape).
+template <typename T, typename Geometry>
+    requires(!VertexRule<Geometry>)
+Color3<T> trace_path(const Scene& scene, Sampler& sampler, const Ray& primary, const SurfaceInteraction3f& first,
+                     const SurfaceInteraction<T>& first_si, const Geometry& geometry, const PathSettings& settings,
+                     RayCounter& rays) {
+    GeometryRule<T, Geometry> rule{geometry};
+    return trace_path<T>(scene, sampler, primary, first, first_si, rule, settings, rays);
 }
 
 } // namespace penumbra

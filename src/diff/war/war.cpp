@@ -3,9 +3,8 @@
 #include "diff/film_sample.h"
 #include "diff/material_form.h"
 #include "diff/pixel_driver.h"
-#include "render/emitter_hit.h"
 #include "render/light_medium.h"
-#include "render/mis.h"
+#include "render/path_tracer.h"
 
 namespace penumbra {
 
@@ -25,126 +24,84 @@ struct WarContext {
           boundary(s), field{s, p, form, boundary, o.field}, settings(o.path) {}
 };
 
-// The radiance of the infinite emitters along the escaped direction d warped on the sphere (value d, tangent
-// V).
-Color3<Var> environment(const WarContext& c, const Vec3f& d, const Vec3<Var>& warped) {
-    Color3<Var> L(Var(0.f));
-    for (const auto& e : c.scene.emitters)
-        if (e->is_infinite() && !e->is_delta())
-            L += e->eval_environment(c.form.direction_to_reference_light(*e, d) + (warped - Vec3<Var>(d)));
-    return L;
-}
+// The vertex rule of the unidirectional estimator (render/path_tracer.h; Algorithm 2 lines 6–17): every vertex
+// warped by the field conditioned on its detector-side neighbour as it is sampled, p(θ) = p + (θ − θ0) v(p)
+// with the factor 1 + (θ − θ0) ∇·v in its area Jacobian.
+struct WarRule {
+    const WarContext& c;
+    AuxiliaryRng& rng;
+    Vec3<Var> material;           // the current vertex's material point, for its field's conditioning
+    Vec3<Var> escaped;            // the direction an escaped ray left along, warped on the sphere
+    SurfaceInteraction<Var> next; // the vertex the last step placed
 
-// Next-event estimation at the detector vertex p^D_n (Algorithm 2 lines 7–10): the light vertex p^S_n warped
-// conditioned on p^D_n, f_s L_e G J (1 + ∇·v) / (G_0 p_σ); the environment's direction warped on the sphere;
-// delta lights connected in material form without a warp.
-Color3<Var> next_event(const WarContext& c, const BSDF* bsdf, const SurfaceInteraction3f& hit,
-                       const SurfaceInteraction<Var>& si, const WarNeighbor& here,
-                       const DirectionSample3f& ds, AuxiliaryRng& rng, uint64_t& rays) {
-    const BSDFContext ctx{TransportMode::Radiance};
-    if (ds.emitter->is_delta()) return next_event_contribution(ctx, bsdf, si, ds, c.form);
-    if (const Shape* shape = ds.emitter->shape()) {
-        const SurfaceInteraction3f light =
-            surface_interaction<float>(*shape, ds.prim, ds.bary, MeshVertices{shape->mesh});
-        WarVertex y = war_vertex(c.field, light, here, rng, rays);
-        const Vec3<Var> to_light = y.si.p - si.p;
-        const Var dist2 = squared_norm(to_light);
-        const Vec3<Var> wo = to_light / sqrt(dist2);
-        y.si.wi = y.si.to_local(-wo);
-        const Var g = abs(dot(y.si.n, wo)) / dist2;
-        return bsdf->eval(ctx, si, si.to_local(wo)) * ds.emitter->eval(y.si) *
-               (relative_change(g * y.jacobian) / Var(ds.pdf));
+    SurfaceInteraction<Var> arrive(const SurfaceInteraction3f&, const SurfaceInteraction<Var>&) const {
+        return next;
     }
-    const WarpEstimate e = war_direction(c.field, hit, here.position, ds.d, rng, rays);
-    return bsdf->eval(ctx, si, si.to_local(e.direction)) * (e.jacobian / Var(ds.pdf)) *
-           ds.emitter->eval_environment(c.form.direction_to_reference_light(*ds.emitter, ds.d) +
-                                        (e.direction - Vec3<Var>(ds.d)));
-}
 
-// The radiance leaving the first vertex toward the camera along one path (render/path_tracer.h's sampling in
-// the reference configuration; Algorithm 2 lines 6–17), every vertex warped as it is sampled.
-Color3<Var> warped_path(const WarContext& c, Sampler& sampler, AuxiliaryRng& rng, const Ray& primary,
-                        const SurfaceInteraction3f& first, const WarVertex& first_vertex, uint64_t& rays) {
-    const BSDFContext ctx{TransportMode::Radiance};
-    const PathSettings& settings = c.settings;
-    Color3<Var> L(Var(0.f)), throughput(Var(1.f));
-    if (settings.max_depth == 0) return L;
-    const unsigned max_depth = unsigned(settings.max_depth); // -1 wraps to "infinite"
-    float eta = 1.f;
-    Ray ray = primary;
-    SurfaceInteraction3f hit = first, prev_hit;
-    SurfaceInteraction<Var> si = first_vertex.si;
-    Vec3<Var> material = first_vertex.material, escaped(ray.d);
-    float prev_bsdf_pdf = 1.f;
-    bool prev_bsdf_delta = true;
+    Color3<Var> emitted(const Emitter& e, const Color3f&, const SurfaceInteraction3f& hit,
+                        const SurfaceInteraction<Var>& si, const Vec3f& d) const {
+        return hit.is_valid() ? e.eval(si) : c.form.environment(c.scene, d, escaped);
+    }
 
-    for (unsigned depth = 0;; ++depth) {
-        if (!(depth == 0 && settings.hide_emitters))
-            for_each_emitter_hit(
-                c.scene, prev_hit, ray.d, hit, [&](const Emitter* e, const Color3f&, float pdf) {
-                    const float w = prev_bsdf_delta ? 1.f : mis_power(prev_bsdf_pdf, pdf);
-                    const Color3<Var> Le = hit.is_valid() ? e->eval(si) : environment(c, ray.d, escaped);
-                    L += throughput * Le * Var(w);
-                });
-        if (!hit.is_valid() || depth + 1 >= max_depth) break;
-        const BSDF* bsdf = hit.bsdf();
-        if (!bsdf) break;
+    // Next-event estimation at the detector vertex p^D_n (Algorithm 2 lines 7–10): the light vertex p^S_n
+    // warped conditioned on p^D_n, f_s L_e G J (1 + ∇·v) / (G_0 p_σ); the environment's direction warped on
+    // the sphere; delta lights connected in material form without a warp.
+    Color3<Var> next_event(const BSDF& bsdf, const SurfaceInteraction3f& hit, const SurfaceInteraction<Var>& si,
+                           const DirectionSample3f& ds, const Color3f&, RayCounter& rays) {
+        const BSDFContext ctx{TransportMode::Radiance};
+        if (ds.emitter->is_delta()) return next_event_contribution(ctx, &bsdf, si, ds, c.form);
         const WarNeighbor here{hit, material};
-
-        if (bsdf->has(BSDFSmooth) && !c.scene.emitters.empty()) {
-            const auto [ds, em_weight] = c.scene.sample_emitter_direction(hit, sampler.next_2d(), true);
-            ++rays;
-            if (!is_black(em_weight)) {
-                const float w = ds.delta ? 1.f : mis_power(ds.pdf, bsdf->pdf(ctx, hit, hit.to_local(ds.d)));
-                L += throughput * next_event(c, bsdf, hit, si, here, ds, rng, rays) * Var(w);
-            }
-        } else {
-            sampler.next_2d(); // keep the sample stream aligned across materials
+        if (const Shape* shape = ds.emitter->shape()) {
+            const SurfaceInteraction3f light =
+                surface_interaction<float>(*shape, ds.prim, ds.bary, MeshVertices{shape->mesh});
+            WarVertex y = war_vertex(c.field, light, here, rng, rays.rays);
+            const Vec3<Var> to_light = y.si.p - si.p;
+            const Var dist2 = squared_norm(to_light);
+            const Vec3<Var> wo = to_light / sqrt(dist2);
+            y.si.wi = y.si.to_local(-wo);
+            const Var g = abs(dot(y.si.n, wo)) / dist2;
+            return bsdf.eval(ctx, si, si.to_local(wo)) * ds.emitter->eval(y.si) *
+                   (relative_change(g * y.jacobian) / Var(ds.pdf));
         }
+        const WarpEstimate e = war_direction(c.field, hit, here.position, ds.d, rng, rays.rays);
+        return bsdf.eval(ctx, si, si.to_local(e.direction)) * (e.jacobian / Var(ds.pdf)) *
+               ds.emitter->eval_environment(c.form.direction_to_reference_light(*ds.emitter, ds.d) +
+                                            (e.direction - Vec3<Var>(ds.d)));
+    }
 
-        const float u1 = sampler.next_1d();
-        const auto [bs, weight] = bsdf->sample(ctx, hit, u1, sampler.next_2d());
-        if (is_black(weight)) break;
-        const Vec3f d = hit.to_world(bs.wo);
-        ray = hit.spawn_ray(d);
-        ++rays;
-        const SurfaceInteraction3f next = c.scene.intersect(ray);
-        const bool delta = (bs.sampled_type & BSDFDelta) != 0;
+    void scatter(const BSDF& bsdf, const SurfaceInteraction3f& hit, const SurfaceInteraction<Var>& si,
+                 const BSDFSample& bs, const Color3f& weight, const Vec3f& d, const SurfaceInteraction3f& to,
+                 bool delta, Color3<Var>& throughput, RayCounter& rays) {
+        const BSDFContext ctx{TransportMode::Radiance};
+        const WarNeighbor here{hit, material};
         SurfaceInteraction<Var> next_si;
         if (delta) {
             // No area integral at a delta lobe: the direction is fixed, no derivative flows through it.
             throughput *= Color3<Var>(weight);
-            if (next.is_valid()) next_si = c.form.vertex(next), material = next_si.p;
+            if (to.is_valid()) next_si = c.form.vertex(to), material = next_si.p;
             escaped = Vec3<Var>(d);
-        } else if (next.is_valid()) {
+        } else if (to.is_valid()) {
             // p^D_{n+1} warped conditioned on p^D_n: f_s G J (1 + ∇·v) / (G_0 p_σ).
-            const WarVertex x = war_vertex(c.field, next, here, rng, rays);
+            const WarVertex x = war_vertex(c.field, to, here, rng, rays.rays);
             const Vec3<Var> to_next = x.si.p - si.p;
             const Var dist2 = squared_norm(to_next);
             const Vec3<Var> wo = to_next / sqrt(dist2);
             const Var g = abs(dot(x.si.n, wo)) / dist2;
             throughput *=
-                bsdf->eval(ctx, si, si.to_local(wo)) * (relative_change(g * x.jacobian) / Var(bs.pdf));
+                bsdf.eval(ctx, si, si.to_local(wo)) * (relative_change(g * x.jacobian) / Var(bs.pdf));
             next_si = x.si;
             material = x.material;
         } else {
-            const WarpEstimate e = war_direction(c.field, hit, material, d, rng, rays);
-            throughput *= bsdf->eval(ctx, si, si.to_local(e.direction)) * (e.jacobian / Var(bs.pdf));
+            const WarpEstimate e = war_direction(c.field, hit, material, d, rng, rays.rays);
+            throughput *= bsdf.eval(ctx, si, si.to_local(e.direction)) * (e.jacobian / Var(bs.pdf));
             escaped = e.direction;
         }
-        if (next.is_valid()) {
+        if (to.is_valid()) {
             next_si.wi = next_si.to_local(normalize(si.p - next_si.p));
-            si = next_si;
+            next = next_si;
         }
-        eta *= bs.eta;
-        prev_hit = hit;
-        prev_bsdf_pdf = bs.pdf;
-        prev_bsdf_delta = delta;
-        hit = next;
-        if (depth + 1 >= unsigned(settings.rr_depth) && !survives_roulette(throughput, eta, sampler)) break;
     }
-    return L;
-}
+};
 
 // One camera sample of pixel (px, py): the film position from the defensive filter mixture
 // (diff/film_sample.h), the first vertex p^D_1 warped conditioned on the camera, and the camera factor
@@ -172,7 +129,11 @@ Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, AuxiliaryRng& r
     if (!sensor.film_position(p_cam, n_cam, s, jacobian)) return Color3<Var>(Var(0.f));
     const Var factor = film.filter_weight(px, py, s) * relative_change(jacobian * x1.jacobian) / Var(fs.pdf);
     x1.si.wi = x1.si.to_local(c.form.direction_from_reference_camera(sensor.to_sensor(p_cam)));
-    return warped_path(c, sampler, rng, ray, first, x1, rays) * factor;
+    WarRule rule{c, rng, x1.material, Vec3<Var>(ray.d), {}};
+    RayCounter counter;
+    const Color3<Var> L = trace_path<Var>(c.scene, sampler, ray, first, x1.si, rule, c.settings, counter);
+    rays += counter.rays;
+    return L * factor;
 }
 
 // ṡ · across at a point s of a pixel edge or of the film's edge: the film velocity

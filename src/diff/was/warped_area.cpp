@@ -6,9 +6,8 @@
 #include "diff/pixel_driver.h"
 #include "diff/was/auxiliary_rays.h"
 #include "diff/was/control_variate.h"
-#include "render/emitter_hit.h"
 #include "render/light_medium.h"
-#include "render/mis.h"
+#include "render/path_tracer.h"
 
 namespace penumbra {
 
@@ -54,15 +53,6 @@ struct WasContext {
     }
 };
 
-// Radiance of the infinite emitters along the warped escaped direction (value d, derivative V).
-Color3<Var> environment(const WasContext& c, const Vec3f& d, const Vec3<Var>& warped) {
-    Color3<Var> L(Var(0.f));
-    for (const auto& e : c.scene.emitters)
-        if (e->is_infinite() && !e->is_delta())
-            L += e->eval_environment(c.form.direction_to_reference_light(*e, d) + (warped - Vec3<Var>(d)));
-    return L;
-}
-
 // The warp of direction ω at the surface vertex `hit` (x(θ) = si.p): Algorithm 2 or 3 with vMF auxiliary
 // rays.
 WarpEstimate warp_at(const WasContext& c, const SurfaceInteraction3f& hit, const SurfaceInteraction<Var>& si,
@@ -73,76 +63,48 @@ WarpEstimate warp_at(const WasContext& c, const SurfaceInteraction3f& hit, const
     return e;
 }
 
-// Next-event estimation at x in solid angle: f_s(ω(θ)) L_e(y(θ) → x) J / p_σ, with y(θ) where the warped ray
-// meets the moving emitter (area lights) or the environment along ω(θ). Delta lights are connected in
-// material form (the light's position and x as they move; their shadows' motion is not seen, header).
-Color3<Var> next_event(const WasContext& c, const BSDF* bsdf, const SurfaceInteraction3f& hit,
-                       const SurfaceInteraction<Var>& si, const DirectionSample3f& ds, AuxiliaryRng& rng,
-                       RayCounter& rays) {
-    const BSDFContext ctx{TransportMode::Radiance};
-    if (ds.emitter->is_delta()) return next_event_contribution(ctx, bsdf, si, ds, c.form);
-    const WarpEstimate e = warp_at(c, hit, si, ds.d, rng, rays);
-    const Color3<Var> f = bsdf->eval(ctx, si, si.to_local(e.direction)) * (e.jacobian / Var(ds.pdf));
-    if (const Shape* shape = ds.emitter->shape()) {
-        const SurfaceInteraction3f light =
-            surface_interaction<float>(*shape, ds.prim, ds.bary, MeshVertices{shape->mesh});
-        SurfaceInteraction<Var> y = warped_vertex(c.params, light, si.p, e.direction);
-        y.wi = y.to_local(-e.direction);
-        return f * ds.emitter->eval(y);
+// The vertex rule of warped-area sampling (render/path_tracer.h; Algorithm 1 lines 3–7): every non-delta
+// direction ω sampled at x is warped, ω(θ) = ω + (θ − θ0) V(ω), with the Jacobian 1 + (θ − θ0) ∇·V, and the
+// next vertex is where the warped ray meets the moving surface.
+struct WasRule {
+    const WasContext& c;
+    AuxiliaryRng& rng;
+    Vec3<Var> direction;          // the warped direction that reached the current vertex
+    SurfaceInteraction<Var> next; // the vertex the last step placed
+
+    SurfaceInteraction<Var> arrive(const SurfaceInteraction3f&, const SurfaceInteraction<Var>&) const {
+        return next;
     }
-    return f * ds.emitter->eval_environment(c.form.direction_to_reference_light(*ds.emitter, ds.d) +
-                                            (e.direction - Vec3<Var>(ds.d)));
-}
 
-// Radiance leaving the first vertex toward the camera along one path (render/path_tracer.h's sampling, in
-// the reference configuration), each non-delta direction warped (Algorithm 1 lines 3–7).
-Color3<Var> warped_path(const WasContext& c, Sampler& sampler, AuxiliaryRng& rng, const Ray& primary,
-                        const SurfaceInteraction3f& first, const SurfaceInteraction<Var>& first_si,
-                        RayCounter& rays) {
-    const BSDFContext ctx{TransportMode::Radiance};
-    const PathSettings& settings = c.settings;
-    Color3<Var> L(Var(0.f)), throughput(Var(1.f));
-    if (settings.max_depth == 0) return L;
-    const unsigned max_depth = unsigned(settings.max_depth); // -1 wraps to "infinite"
-    float eta = 1.f;
-    Ray ray = primary;
-    SurfaceInteraction3f hit = first, prev_hit;
-    SurfaceInteraction<Var> si = first_si;
-    Vec3<Var> direction(ray.d); // the warped direction that reached `hit`
-    float prev_bsdf_pdf = 1.f;
-    bool prev_bsdf_delta = true;
+    Color3<Var> emitted(const Emitter& e, const Color3f&, const SurfaceInteraction3f& hit,
+                        const SurfaceInteraction<Var>& si, const Vec3f& d) const {
+        return hit.is_valid() ? e.eval(si) : c.form.environment(c.scene, d, direction);
+    }
 
-    for (unsigned depth = 0;; ++depth) {
-        if (!(depth == 0 && settings.hide_emitters))
-            for_each_emitter_hit(
-                c.scene, prev_hit, ray.d, hit, [&](const Emitter* e, const Color3f&, float pdf) {
-                    const float w = prev_bsdf_delta ? 1.f : mis_power(prev_bsdf_pdf, pdf);
-                    const Color3<Var> Le = hit.is_valid() ? e->eval(si) : environment(c, ray.d, direction);
-                    L += throughput * Le * Var(w);
-                });
-        if (!hit.is_valid() || depth + 1 >= max_depth) break;
-        const BSDF* bsdf = hit.bsdf();
-        if (!bsdf) break;
-
-        if (bsdf->has(BSDFSmooth) && !c.scene.emitters.empty()) {
-            const auto [ds, em_weight] = c.scene.sample_emitter_direction(hit, sampler.next_2d(), true);
-            ++rays.rays;
-            if (!is_black(em_weight)) {
-                const float w = ds.delta ? 1.f : mis_power(ds.pdf, bsdf->pdf(ctx, hit, hit.to_local(ds.d)));
-                L += throughput * next_event(c, bsdf, hit, si, ds, rng, rays) * Var(w);
-            }
-        } else {
-            sampler.next_2d(); // keep the sample stream aligned across materials
+    // Next-event estimation at x in solid angle: f_s(ω(θ)) L_e(y(θ) → x) J / p_σ, with y(θ) where the warped
+    // ray meets the moving emitter (area lights) or the environment along ω(θ). Delta lights are connected in
+    // material form (the light's position and x as they move; their shadows' motion is not seen, header).
+    Color3<Var> next_event(const BSDF& bsdf, const SurfaceInteraction3f& hit, const SurfaceInteraction<Var>& si,
+                           const DirectionSample3f& ds, const Color3f&, RayCounter& rays) {
+        const BSDFContext ctx{TransportMode::Radiance};
+        if (ds.emitter->is_delta()) return next_event_contribution(ctx, &bsdf, si, ds, c.form);
+        const WarpEstimate e = warp_at(c, hit, si, ds.d, rng, rays);
+        const Color3<Var> f = bsdf.eval(ctx, si, si.to_local(e.direction)) * (e.jacobian / Var(ds.pdf));
+        if (const Shape* shape = ds.emitter->shape()) {
+            const SurfaceInteraction3f light =
+                surface_interaction<float>(*shape, ds.prim, ds.bary, MeshVertices{shape->mesh});
+            SurfaceInteraction<Var> y = warped_vertex(c.params, light, si.p, e.direction);
+            y.wi = y.to_local(-e.direction);
+            return f * ds.emitter->eval(y);
         }
+        return f * ds.emitter->eval_environment(c.form.direction_to_reference_light(*ds.emitter, ds.d) +
+                                                (e.direction - Vec3<Var>(ds.d)));
+    }
 
-        const float u1 = sampler.next_1d();
-        const auto [bs, weight] = bsdf->sample(ctx, hit, u1, sampler.next_2d());
-        if (is_black(weight)) break;
-        const Vec3f d = hit.to_world(bs.wo);
-        ray = hit.spawn_ray(d);
-        ++rays.rays;
-        const SurfaceInteraction3f next = c.scene.intersect(ray);
-        const bool delta = (bs.sampled_type & BSDFDelta) != 0;
+    void scatter(const BSDF& bsdf, const SurfaceInteraction3f& hit, const SurfaceInteraction<Var>& si,
+                 const BSDFSample& bs, const Color3f& weight, const Vec3f& d, const SurfaceInteraction3f& to,
+                 bool delta, Color3<Var>& throughput, RayCounter& rays) {
+        const BSDFContext ctx{TransportMode::Radiance};
         if (delta) {
             // No integral over directions at a delta lobe (no derivative flows through it, as the interior
             // term).
@@ -151,23 +113,14 @@ Color3<Var> warped_path(const WasContext& c, Sampler& sampler, AuxiliaryRng& rng
         } else {
             const WarpEstimate e = warp_at(c, hit, si, d, rng, rays);
             direction = e.direction;
-            throughput *= bsdf->eval(ctx, si, si.to_local(direction)) * (e.jacobian / Var(bs.pdf));
+            throughput *= bsdf.eval(ctx, si, si.to_local(direction)) * (e.jacobian / Var(bs.pdf));
         }
-        if (next.is_valid()) {
-            SurfaceInteraction<Var> x = warped_vertex(c.params, next, si.p, direction);
-            x.wi = x.to_local(-direction);
-            si = x;
+        if (to.is_valid()) {
+            next = warped_vertex(c.params, to, si.p, direction);
+            next.wi = next.to_local(-direction);
         }
-        eta *= bs.eta;
-        prev_hit = hit;
-        prev_bsdf_pdf = bs.pdf;
-        prev_bsdf_delta = delta;
-        hit = next;
-
-        if (depth + 1 >= unsigned(settings.rr_depth) && !survives_roulette(throughput, eta, sampler)) break;
     }
-    return L;
-}
+};
 
 // The film auxiliary sample at position `x` (Algorithm 2 on the film, §3.3): the boundary test of the point
 // seen through x and its film motion ∂θ s(y(θ)) (the direct warp). Positions beyond the film's edge see the
@@ -265,11 +218,12 @@ CameraSample camera_sample(const WasContext& c, Sampler& sampler, AuxiliaryRng& 
     const SurfaceInteraction3f first = c.scene.intersect(ray);
     Color3<Var> L(Var(0.f));
     if (!first.is_valid()) {
-        if (!c.settings.hide_emitters) L = environment(c, ray.d, direction);
+        if (!c.settings.hide_emitters) L = c.form.environment(c.scene, ray.d, direction);
     } else {
         SurfaceInteraction<Var> x1 = warped_vertex(c.params, first, c.form.camera_position(ray.o), direction);
         x1.wi = x1.to_local(-direction);
-        L = warped_path(c, sampler, rng, ray, first, x1, rays);
+        WasRule rule{c, rng, Vec3<Var>(ray.d), {}};
+        L = trace_path<Var>(c.scene, sampler, ray, first, x1, rule, c.settings, rays);
     }
     out.radiance = Color3f(L.x.v, L.y.v, L.z.v);
     out.value = L * weight;
