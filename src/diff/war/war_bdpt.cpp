@@ -5,6 +5,8 @@
 #include "render/bdpt_sample.h"
 #include "render/integrator_settings.h"
 
+#include <algorithm>
+
 namespace penumbra {
 
 namespace {
