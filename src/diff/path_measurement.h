@@ -15,6 +15,7 @@
 // After a delta lobe the next vertex follows its direction: as in render/volpath_material.h, that segment's
 // G' and the vertex's J are left out.
 #pragma once
+#include "core/var.h"
 #include "render/bdpt_record.h"
 #include "render/path_tracer.h"
 
@@ -170,6 +171,25 @@ Color3<T> path_measurement(const StrategyRecord& st, const std::vector<MeasuredV
            chain_weight(st.connection, zt.p, ys.p, false, false, false, geometry) *
            measured_geometry(zt, ys) *
            measured_scattering(ys, zt.p, normalize(y[size_t(st.s - 2)].p - ys.p)) * light[size_t(st.s - 1)];
+}
+
+// f / detach(f), one where the reference value vanishes (the strategy's contribution does too).
+inline Var relative(const Var& f) { return f.v != 0.f && std::isfinite(f.v) ? f / Var(f.v) : Var(1.f); }
+
+// Σ_{s,t} C_{s,t} f(x̄; θ) / f(x̄; θ0) over the recorded strategies (render/bdpt_sample.h) that contribute,
+// f(x̄; θ) = measurement(st) the strategy's path on the geometry: the estimator at θ0 is the renderer's, its
+// sampling densities and MIS weights detached (paper 001 §7, paper 000 Eq. 54).
+template <typename Measurement>
+Color3<Var> reweighted_strategies(const BDPTRecord& record, Measurement&& measurement) {
+    Color3<Var> L(Var(0.f));
+    for (int k = 0; k < record.count; ++k) {
+        const StrategyRecord& st = record.strategies[size_t(k)];
+        if (is_black(st.value)) continue;
+        const Color3<Var> f = measurement(st);
+        L += Color3<Var>(Var(st.value.x) * relative(f.x), Var(st.value.y) * relative(f.y),
+                         Var(st.value.z) * relative(f.z));
+    }
+    return L;
 }
 
 } // namespace penumbra

@@ -18,17 +18,13 @@
 
 #include "core/interrupt.h"
 #include "core/stratified.h"
-#include "render/bdpt_connect.h"
-#include "render/light_medium.h"
-#include "scene/sensors/sensor_common.h"
+#include "render/bdpt_sample.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <limits>
 #include <mutex>
 
 namespace penumbra {
@@ -42,15 +38,7 @@ std::vector<Layer> BidirectionalPathTracer::render(const Scene& scene, const Ren
     const int width = film.width, height = film.height;
     const int spp = sensor.sampler->effective_spp(options.spp);
     const uint64_t n_pixels = uint64_t(width) * height;
-    const bool has_media = scene_has_media(scene);
-    const bool sensor_connects = dynamic_cast<const MeterSensor*>(&sensor) == nullptr;
-    const size_t unlimited = std::numeric_limits<size_t>::max();
-    const size_t max_camera = settings_.max_depth < 0 ? unlimited : size_t(settings_.max_depth) + 1;
-    const size_t max_light = settings_.max_depth < 0 ? unlimited : size_t(settings_.max_depth);
-
-    // Infinite lights emit from a disk of the scene's bounding sphere, enlarged as the emitters do.
-    BoundingSphere bounds = scene.bounding_sphere();
-    bounds.radius = std::max(RayEpsilon, bounds.radius * (1.f + RayEpsilon));
+    const BDPTPass pass(scene, settings_, true);
 
     constexpr int n_chunks = 16;
     std::vector<Image> splats(n_chunks, Image(width, height));
@@ -65,8 +53,7 @@ std::vector<Layer> BidirectionalPathTracer::render(const Scene& scene, const Ren
         tbb::parallel_for(0, n_chunks, [&](int c) {
             Sampler sampler(*sensor.sampler, spp);
             RayCounter counter;
-            BDPTContext ctx{scene, settings_, sampler, counter, has_media, sensor_connects, bounds, nullptr};
-            std::vector<PathVertex> camera, light;
+            BDPTSample sample;
             uint64_t local_dropped = 0;
             const uint64_t begin = n_pixels * c / n_chunks, end = n_pixels * (c + 1) / n_chunks;
             for (uint64_t pixel = begin; pixel < end; ++pixel) {
@@ -81,9 +68,8 @@ std::vector<Layer> BidirectionalPathTracer::render(const Scene& scene, const Ren
                     const Vec2f u_aperture = sampler.next_2d();
                     const auto [ray, weight] = sensor.sample_ray(pos, u_aperture);
                     ++counter.rays;
-                    camera_subpath(ctx, ray, u_aperture, camera, max_camera);
-                    light_subpath(ctx, light, max_light);
-                    const Color3f L = connect_subpaths(ctx, camera, light, splats[size_t(c)]);
+                    const Color3f L =
+                        sample.render(pass, sampler, counter, ray, u_aperture, splats[size_t(c)]);
                     if (is_finite(L))
                         sum += L * weight;
                     else

@@ -164,7 +164,7 @@ void light_tracing(BDPTContext& ctx, const std::vector<PathVertex>& light, int s
 } // namespace
 
 Color3f connect_subpaths(BDPTContext& ctx, const std::vector<PathVertex>& camera,
-                         const std::vector<PathVertex>& light, Image& splats) {
+                         const std::vector<PathVertex>& light, Image* splats) {
     const BDPTSettings& settings = ctx.settings;
     const int max_segments = settings.max_depth < 0 ? std::numeric_limits<int>::max() : settings.max_depth;
     const int n_camera = int(camera.size()), n_light = int(light.size());
@@ -177,7 +177,7 @@ Color3f connect_subpaths(BDPTContext& ctx, const std::vector<PathVertex>& camera
             if (segments == 1 && settings.hide_emitters) continue;
             if (settings.strategy_s >= 0 && (s != settings.strategy_s || t != settings.strategy_t)) continue;
             if (t == 1) {
-                if (ctx.sensor_connects) light_tracing(ctx, light, s, splats);
+                if (ctx.sensor_connects) light_tracing(ctx, light, s, *splats);
                 continue;
             }
             StrategyRecord* record = ctx.record ? &ctx.record->next(s, t) : nullptr;

@@ -9,8 +9,9 @@
 namespace penumbra {
 
 // Returns the radiance estimate for the camera subpath's pixel (t >= 2) and adds the light tracing
-// contributions (t = 1) to `splats` (unnormalized: the caller scales by image pixels / light paths).
+// contributions (t = 1) to `splats` (unnormalized: the caller scales by image pixels / light paths; unused,
+// and may be null, when ctx.sensor_connects is false).
 Color3f connect_subpaths(BDPTContext& ctx, const std::vector<PathVertex>& camera,
-                         const std::vector<PathVertex>& light, Image& splats);
+                         const std::vector<PathVertex>& light, Image* splats);
 
 } // namespace penumbra

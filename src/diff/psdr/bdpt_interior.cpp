@@ -1,18 +1,11 @@
 #include "diff/psdr/bdpt_interior.h"
 
 #include "diff/path_measurement.h"
-#include "render/bdpt.h"
-#include "render/bdpt_connect.h"
-#include "render/light_medium.h"
-
-#include <limits>
+#include "render/bdpt_sample.h"
 
 namespace penumbra {
 
 namespace {
-
-// f / detach(f), one where the reference value vanishes (the strategy's contribution does too).
-Var relative(const Var& f) { return f.v != 0.f && std::isfinite(f.v) ? f / Var(f.v) : Var(1.f); }
 
 // z_1 on the geometry with its camera factor (diff/psdr/interior_media.h's rule): image space, on the fixed camera
 // ray (a medium vertex keeps its fraction of the ray's piece between the moving surfaces around it, with the
@@ -92,25 +85,14 @@ void require_bidirectional_support(const Scene& scene) {
 Color3<Var> bidirectional_camera_path(const Scene& scene, const MaterialForm& form, Sampler& sampler,
                                       const Ray& ray, const Color3f& ray_weight, const CameraFactor& camera,
                                       float escaped_weight, const PathSettings& settings, RayCounter& rays) {
-    thread_local BDPTRecord record;
-    thread_local std::vector<PathVertex> camera_path, light_path;
+    thread_local BDPTSample sample;
     thread_local std::vector<MeasuredVertex<Var>> z, y;
     thread_local std::vector<Color3<Var>> camera_factors, light_factors;
-    thread_local Image no_splats(1, 1);
-    const BDPTSettings bdpt = bdpt_settings(scene, settings);
-    BoundingSphere bounds = scene.bounding_sphere();
-    bounds.radius = std::max(RayEpsilon, bounds.radius * (1.f + RayEpsilon));
     // No sensor connection: light tracing (t = 1) is neither sampled nor counted in the MIS weights.
-    BDPTContext ctx{scene, bdpt, sampler, rays, scene_has_media(scene), false, bounds, &record};
-    const size_t unlimited = std::numeric_limits<size_t>::max();
-    const size_t max_camera = bdpt.max_depth < 0 ? unlimited : size_t(bdpt.max_depth) + 1;
-    const size_t max_light = bdpt.max_depth < 0 ? unlimited : size_t(bdpt.max_depth);
-    record.clear();
-    camera_subpath(ctx, ray, Vec2f(0.5f), camera_path, max_camera);
-    light_subpath(ctx, light_path, max_light);
-    connect_subpaths(ctx, camera_path, light_path, no_splats);
-    Color3<Var> L(Var(0.f));
-    if (camera_path.size() < 2 || record.count == 0) return L;
+    sample.trace_recorded(BDPTPass(scene, bdpt_settings(scene, settings), false), sampler, rays, ray);
+    const std::vector<PathVertex>& camera_path = sample.camera;
+    const BDPTRecord& record = sample.record;
+    if (camera_path.size() < 2 || record.count == 0) return Color3<Var>(Var(0.f));
 
     // The camera subpath on the geometry.
     const bool image = form.image_space_first_vertex();
@@ -131,17 +113,13 @@ Color3<Var> bidirectional_camera_path(const Scene& scene, const MaterialForm& fo
 
     // The light subpath on the geometry.
     y.clear();
-    for (const PathVertex& v : light_path)
+    for (const PathVertex& v : sample.light)
         y.push_back(measured_vertex<Var>(v, form));
     light_prefix(y, record, form, light_factors);
 
-    for (int k = 0; k < record.count; ++k) {
-        const StrategyRecord& st = record.strategies[size_t(k)];
-        if (is_black(st.value)) continue;
-        const Color3<Var> f = path_measurement(st, z, y, camera_factors, light_factors, o, scene, form);
-        L += Color3<Var>(Var(st.value.x) * relative(f.x), Var(st.value.y) * relative(f.y),
-                         Var(st.value.z) * relative(f.z));
-    }
+    const Color3<Var> L = reweighted_strategies(record, [&](const StrategyRecord& st) {
+        return path_measurement(st, z, y, camera_factors, light_factors, o, scene, form);
+    });
     return L * Color3<Var>(ray_weight) * camera_factor;
 }
 

@@ -2,11 +2,10 @@
 
 #include "diff/film_sample.h"
 #include "diff/path_measurement.h"
-#include "render/bdpt_connect.h"
-#include "render/bdpt_record.h"
+#include "render/bdpt_sample.h"
 #include "render/integrator_settings.h"
 
-#include <limits>
+#include <algorithm>
 
 namespace penumbra {
 
@@ -19,19 +18,13 @@ struct Context {
     MaterialForm form;
     BoundaryTest boundary;
     WarScene field;
-    BDPTSettings bdpt;
-    BoundingSphere bounds;
+    // No sensor connection: light tracing (t = 1) is neither sampled nor counted in the MIS weights.
+    BDPTPass bdpt;
 
     Context(const Scene& s, const Parameters& p, const WarOptions& o)
         : scene(s), params(p), form(s, p, FirstVertex::Material),
-          boundary(s), field{s, p, form, boundary, o.field}, bdpt(bdpt_settings(s, o.path)),
-          bounds(s.bounding_sphere()) {
-        bounds.radius = std::max(RayEpsilon, bounds.radius * (1.f + RayEpsilon));
-    }
+          boundary(s), field{s, p, form, boundary, o.field}, bdpt(s, bdpt_settings(s, o.path), false) {}
 };
-
-// f / detach(f), one where the reference value vanishes (the strategy's contribution does too).
-Var relative(const Var& f) { return f.v != 0.f && std::isfinite(f.v) ? f / Var(f.v) : Var(1.f); }
 
 // The subpath vertex v on the geometry, a surface vertex warped conditioned on its detector-side neighbour y
 // unless `warp` is false (reached along a delta lobe); `material` gets X(p, θ) without the warp.
@@ -107,12 +100,10 @@ bool camera_factor(const Context& c, const Shot& shot, const MeasuredVertex<Var>
 // Σ_{s, t≥2} C_{s,t} f̂(p̄; θ) / f̂(p̄; θ0) times z_1's camera factor: one camera sample (Eq. 54).
 Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng, int px, int py,
                           uint64_t& rays) {
-    thread_local BDPTRecord record;
-    thread_local std::vector<PathVertex> camera_path, light_path;
+    thread_local BDPTSample sample;
     thread_local std::vector<MeasuredVertex<Var>> z, y, ys;
     thread_local std::vector<Vec3<Var>> z_material;
     thread_local std::vector<Color3<Var>> camera_factors, light_factors, heads;
-    thread_local Image no_splats(1, 1);
     const Sensor& sensor = *c.scene.sensor;
     const Film& film = *sensor.film;
     const FilmSample fs = sample_film(*film.rfilter, sampler, false);
@@ -121,18 +112,11 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng,
     // carries W/p.
     const Shot shot{px, py, fs, sensor.sample_ray(center + fs.offset, sampler.next_2d()).first};
     RayCounter counter;
-    // No sensor connection: light tracing (t = 1) is neither sampled nor counted in the MIS weights.
-    BDPTContext ctx{c.scene, c.bdpt, sampler, counter, false, false, c.bounds, &record};
-    const size_t unlimited = std::numeric_limits<size_t>::max();
-    const size_t max_camera = c.bdpt.max_depth < 0 ? unlimited : size_t(c.bdpt.max_depth) + 1;
-    const size_t max_light = c.bdpt.max_depth < 0 ? unlimited : size_t(c.bdpt.max_depth);
-    record.clear();
-    camera_subpath(ctx, shot.ray, Vec2f(0.5f), camera_path, max_camera);
-    light_subpath(ctx, light_path, max_light);
-    connect_subpaths(ctx, camera_path, light_path, no_splats);
+    sample.trace_recorded(c.bdpt, sampler, counter, shot.ray);
     rays += counter.rays + 1;
-    Color3<Var> L(Var(0.f));
-    if (camera_path.size() < 2 || camera_path[1].infinite || record.count == 0) return L;
+    const std::vector<PathVertex>&camera_path = sample.camera, &light_path = sample.light;
+    const BDPTRecord& record = sample.record;
+    if (camera_path.size() < 2 || camera_path[1].infinite || record.count == 0) return Color3<Var>(Var(0.f));
     size_t s_max = 0;
     for (int k = 0; k < record.count; ++k)
         if (!is_black(record.strategies[size_t(k)].value))
@@ -145,7 +129,7 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng,
     z_material.assign(2, o);
     z[1] = warped_vertex(c, camera_path[1], true, camera, rng, rays, &z_material[1]);
     Var factor;
-    if (!camera_factor(c, shot, z[1], factor)) return L;
+    if (!camera_factor(c, shot, z[1], factor)) return Color3<Var>(Var(0.f));
     z[1].jacobian = Var(1.f); // in the camera factor
     for (size_t k = 2; k < camera_path.size(); ++k) {
         const PathVertex& v = camera_path[k];
@@ -168,28 +152,22 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng,
     }
     light_prefix(y, record, c.form, light_factors);
 
-    for (int k = 0; k < record.count; ++k) {
-        const StrategyRecord& st = record.strategies[size_t(k)];
-        if (is_black(st.value)) continue;
+    const Color3<Var> L = reweighted_strategies(record, [&](const StrategyRecord& st) {
         const size_t t = size_t(st.t), s = size_t(st.s);
         const WarNeighbor here{camera_path[t - 1].si, z_material[t - 1]};
-        Color3<Var> f;
         if (s == 1 && st.light_sample.emitter->shape()) {
             const Vec3<Var> camera_side = t == 2 ? o : z[t - 2].p;
-            f = area_light_connection(c, st, z[t - 1], camera_side, camera_factors[t - 1], here, rng, rays);
-        } else if (s >= 2) {
-            // y_{s−1} warped given z_{t−1} in place of its warp given y_s.
-            ys.assign(y.begin(), y.begin() + std::ptrdiff_t(s - 1));
-            ys.push_back(warped_vertex(c, light_path[s - 1], !light_path[s - 2].delta, here, rng, rays));
-            heads.assign(light_factors.begin(), light_factors.begin() + std::ptrdiff_t(s - 1));
-            heads.push_back(light_head(c, record, ys, light_factors, ys.back(), s - 1));
-            f = path_measurement(st, z, ys, camera_factors, heads, o, c.scene, c.form);
-        } else {
-            f = path_measurement(st, z, y, camera_factors, light_factors, o, c.scene, c.form);
+            return area_light_connection(c, st, z[t - 1], camera_side, camera_factors[t - 1], here, rng,
+                                         rays);
         }
-        L += Color3<Var>(Var(st.value.x) * relative(f.x), Var(st.value.y) * relative(f.y),
-                         Var(st.value.z) * relative(f.z));
-    }
+        if (s < 2) return path_measurement(st, z, y, camera_factors, light_factors, o, c.scene, c.form);
+        // y_{s−1} warped given z_{t−1} in place of its warp given y_s.
+        ys.assign(y.begin(), y.begin() + std::ptrdiff_t(s - 1));
+        ys.push_back(warped_vertex(c, light_path[s - 1], !light_path[s - 2].delta, here, rng, rays));
+        heads.assign(light_factors.begin(), light_factors.begin() + std::ptrdiff_t(s - 1));
+        heads.push_back(light_head(c, record, ys, light_factors, ys.back(), s - 1));
+        return path_measurement(st, z, ys, camera_factors, heads, o, c.scene, c.form);
+    });
     return L * factor;
 }
 
