@@ -89,7 +89,8 @@ Row run_scene(const SuiteOptions& o, const AdSuite& suite, const AdSuiteScene& s
     if (!o.quiet) std::fprintf(stderr, "%s: derivative (%d spp, psdr_budget split)\n", s.name.c_str(), s.spp);
     ProgressBar bar(!o.quiet, s.name + " derivative");
     const auto start = std::chrono::steady_clock::now();
-    const DerivativeImage d = suite_derivative(*c.scene, *c.params, s.spp, DerivativeSeed, o.threads, bar.callback());
+    const DerivativeImage d =
+        suite_derivative(*c.scene, *c.params, s.spp, DerivativeSeed, o.threads, bar.callback());
     row.derivative_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     row.score = score(d.derivative, d.stderr_img, ref.fd);
     const DerivativeTerm& interior = d.term("interior");

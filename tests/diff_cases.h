@@ -113,8 +113,8 @@ inline std::optional<FiniteDifference> stored_war_reference(const ValidationCase
 
 // A method's derivative through the method front, with the given options.
 inline DerivativeImage method_derivative(const std::string& method,
-                                          const std::map<std::string, std::string>& given,
-                                          const LoadedCase& l, int spp, uint64_t seed, int batches) {
+                                         const std::map<std::string, std::string>& given, const LoadedCase& l,
+                                         int spp, uint64_t seed, int batches) {
     MethodOptions o;
     for (const auto& [k, v] : given)
         o.set(k, v);

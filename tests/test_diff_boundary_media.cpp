@@ -335,7 +335,8 @@ TEST(BoundaryMedia, PointLightTranslatingInTheFog) {
     std::printf("  psdr (interior 16 spp + direct 64 spp, 16 batches) %.2f s\n", seconds_since(start));
     const Reference r = reference(*scene, params, 2e-2, 64);
     const DiffCheck total = report("interior + direct", {d.derivative, d.stderr_img}, r);
-    const DiffCheck interior = report("interior only", {d.term("interior").derivative, d.term("interior").stderr_img}, r);
+    const DiffCheck interior =
+        report("interior only", {d.term("interior").derivative, d.term("interior").stderr_img}, r);
     EXPECT_TRUE(total.passes()) << describe(total);
     EXPECT_FALSE(interior.passes()) << "the interior term alone must miss the moving shadows: "
                                     << describe(interior);

@@ -111,7 +111,8 @@ void expect_reverse_matches_forward(const std::string& name, int res, int interi
         for (auto& a : adjoint.pixels)
             a = Color3f(rng.next_float(), rng.next_float(), rng.next_float());
         const Gradient reverse = psdr_gradient(*c.scene, *c.params, adjoint, o);
-        const AdjointPair p = adjoint_pair(adjoint, forward.derivative, reverse.values, c.params->direction());
+        const AdjointPair p =
+            adjoint_pair(adjoint, forward.derivative, reverse.values, c.params->direction());
         std::printf("  %s: <a, Jv> = %.6g, <J^T a, v> = %.6g (scale %.3g)\n", name.c_str(), p.forward,
                     p.reverse, p.scale);
         EXPECT_GT(p.scale, 0.0) << "a zero derivative tests nothing";

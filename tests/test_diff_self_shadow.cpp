@@ -64,7 +64,8 @@ SelfShadowRun run(const std::string& light, int interior_spp, int primary_spp, i
 Image with_boundary_scaled(const DerivativeImage& d, float s) {
     const Image& interior = d.term("interior").derivative;
     Image out = interior;
-    for (size_t i = 0; i < out.pixels.size(); ++i) out.pixels[i] += (d.derivative.pixels[i] - interior.pixels[i]) * s;
+    for (size_t i = 0; i < out.pixels.size(); ++i)
+        out.pixels[i] += (d.derivative.pixels[i] - interior.pixels[i]) * s;
     return out;
 }
 
@@ -76,8 +77,10 @@ Image with_boundary_scaled(const DerivativeImage& d, float s) {
 TEST(SelfShadow, VertexPerturbationOfAConcaveMesh) {
     const SelfShadowRun r = run("area", 16, 16, 64, 256, 2e-2);
     const DiffCheck total = check_against(r.d.derivative, r.d.stderr_img, r.fd.derivative, r.fd_error);
-    const DiffCheck interior = check_against(r.d.term("interior").derivative, r.d.term("interior").stderr_img, r.fd.derivative, r.fd_error);
-    const DiffCheck scaled = check_against(with_boundary_scaled(r.d, 0.8f), r.d.stderr_img, r.fd.derivative, r.fd_error);
+    const DiffCheck interior = check_against(r.d.term("interior").derivative, r.d.term("interior").stderr_img,
+                                             r.fd.derivative, r.fd_error);
+    const DiffCheck scaled =
+        check_against(with_boundary_scaled(r.d, 0.8f), r.d.stderr_img, r.fd.derivative, r.fd_error);
     std::printf("  self_shadow.xml (area light): interior+boundary %s\n  interior only %s\n  boundary x0.8 %s\n",
                 describe(total).c_str(), describe(interior).c_str(), describe(scaled).c_str());
     EXPECT_TRUE(total.passes()) << describe(total);
@@ -93,7 +96,8 @@ TEST(SelfShadow, VertexPerturbationOfAConcaveMesh) {
 TEST(SelfShadow, PrimaryBoundaryOfANonRigidFieldWithTheLightAtTheCamera) {
     const SelfShadowRun r = run("camera", 32, 32, 0, 256, 2e-2);
     const DiffCheck total = check_against(r.d.derivative, r.d.stderr_img, r.fd.derivative, r.fd_error);
-    const DiffCheck interior = check_against(r.d.term("interior").derivative, r.d.term("interior").stderr_img, r.fd.derivative, r.fd_error);
+    const DiffCheck interior = check_against(r.d.term("interior").derivative, r.d.term("interior").stderr_img,
+                                             r.fd.derivative, r.fd_error);
     std::printf("  self_shadow.xml (light at the camera): interior+primary %s\n  interior only %s\n", describe(total).c_str(),
                 describe(interior).c_str());
     EXPECT_TRUE(total.passes()) << describe(total);

@@ -115,8 +115,8 @@ void expect_terminator_matches_fd(const std::string& param) {
     ro.seed = 77 + 1000 * seed;
     const FiniteDifference fd = finite_difference(*scene, params, 1e-2, ro, 16);
     const DiffCheck total = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
-    const DiffCheck interior =
-        check_against(d.term("interior").derivative, d.term("interior").stderr_img, fd.derivative, fd.stderr_img);
+    const DiffCheck interior = check_against(d.term("interior").derivative, d.term("interior").stderr_img,
+                                             fd.derivative, fd.stderr_img);
     std::printf("  %s: interior+primary %s\n  interior only %s\n", param.c_str(), describe(total).c_str(),
                 describe(interior).c_str());
     EXPECT_TRUE(total.passes()) << describe(total);
@@ -324,7 +324,8 @@ TEST(ShadingTerminator, ReverseModeMatchesForwardMode) {
     double primary = 0;
     const Image& primary_term = r.forward.term("primary").derivative;
     for (size_t i = 0; i < r.adjoint.pixels.size(); ++i)
-        for (int k = 0; k < 3; ++k) primary += std::abs(double(r.adjoint.pixels[i][k]) * primary_term.pixels[i][k]);
+        for (int k = 0; k < 3; ++k)
+            primary += std::abs(double(r.adjoint.pixels[i][k]) * primary_term.pixels[i][k]);
     EXPECT_GT(primary, 0.5 * r.scale) << "the terminator should carry most of this derivative";
     EXPECT_NEAR(r.lhs, r.rhs, 1e-4 * r.scale + 1e-6);
 }

@@ -22,7 +22,7 @@ constexpr int Spp = 1024;
 LoadedCase load(const ValidationCase& c, int res = 16) { return load_validation(c, res); }
 
 DerivativeImage was(const LoadedCase& l, int spp, const std::map<std::string, std::string>& given,
-                     uint64_t seed) {
+                    uint64_t seed) {
     return method_derivative("was", given, l, spp, seed, 16);
 }
 

@@ -1,7 +1,7 @@
-// The NaN policy (diff/method.h): a sample whose value or derivative is not finite is
-// left out of the estimate, counted and reported, so that one bad sample never poisons an image or a gradient;
-// and inputs that invite NaNs (degenerate and duplicate triangles, roughness 0 and 1e-8, a camera grazing a
-// plane) render and differentiate with finite outputs.
+// The NaN policy (diff/method.h): a sample whose value or derivative is not finite is left out of the
+// estimate, counted and reported, so that one bad sample never poisons an image or a gradient; and inputs
+// that invite NaNs (degenerate and duplicate triangles, roughness 0 and 1e-8, a camera grazing a plane)
+// render and differentiate with finite outputs.
 #include "robustness_test_util.h"
 #include "xml_test_util.h"
 
@@ -34,8 +34,9 @@ TEST(NanPolicy, PoisonedSamplesAreDroppedCountedAndReported) {
     }
     for (const char* method : {"psdr", "interior"}) {
         const Outputs o = render_and_differentiate(*scene, "box.translate=1,0,0", method);
-        std::printf("  %s: dropped %llu of the render's samples, %llu (derivative), %llu (gradient)\n", method,
-                    (unsigned long long)o.render.dropped_samples, (unsigned long long)o.derivative.cost.dropped,
+        std::printf("  %s: dropped %llu of the render's samples, %llu (derivative), %llu (gradient)\n",
+                    method, (unsigned long long)o.render.dropped_samples,
+                    (unsigned long long)o.derivative.cost.dropped,
                     (unsigned long long)o.gradient.cost.dropped);
         EXPECT_GT(o.render.dropped_samples, 0u);
         EXPECT_GT(o.derivative.cost.dropped, 0u) << method;

@@ -64,8 +64,9 @@ void check_value(const std::string& method, const MethodOption& o, const std::st
 // The NaN policy's report (diff/method.h): the count of dropped samples as a warning.
 template <typename Result> Result reported(Result result) {
     if (result.cost.dropped > 0)
-        result.warnings.push_back(std::to_string(result.cost.dropped) +
-                                  " sample(s) with a non-finite value or derivative were left out of the estimate");
+        result.warnings.push_back(
+            std::to_string(result.cost.dropped) +
+            " sample(s) with a non-finite value or derivative were left out of the estimate");
     return result;
 }
 
@@ -93,7 +94,8 @@ std::string MethodOptions::get_string(const std::string& name, const std::string
     return it == values_.end() ? fallback : it->second;
 }
 
-DerivativeImage DerivativeMethod::derivative(const Scene& scene, const Parameters& params, const MethodRun& run) {
+DerivativeImage DerivativeMethod::derivative(const Scene& scene, const Parameters& params,
+                                             const MethodRun& run) {
     return reported(estimate_derivative(scene, params, run));
 }
 

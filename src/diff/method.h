@@ -66,7 +66,8 @@ class DerivativeMethod {
   public:
     virtual ~DerivativeMethod() = default;
     DerivativeImage derivative(const Scene& scene, const Parameters& params, const MethodRun& run);
-    Gradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const MethodRun& run);
+    Gradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                      const MethodRun& run);
     Gradient loss_gradient(const Scene& scene, const Parameters& params, const Image& target, LossKind loss,
                            const MethodRun& run);
 
@@ -78,7 +79,8 @@ class DerivativeMethod {
                                                 const MethodRun& run) = 0;
     virtual Gradient estimate_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                                        const MethodRun& run) = 0;
-    // By default a primal render with its own samples gives the loss and its adjoint, then estimate_gradient().
+    // By default a primal render with its own samples gives the loss and its adjoint, then
+    // estimate_gradient().
     virtual Gradient estimate_loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
                                             LossKind loss, const MethodRun& run);
 };

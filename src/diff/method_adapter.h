@@ -1,5 +1,5 @@
-// What the adapters of the estimators behind the common front of diff/method.h (diff/*/*_method.cpp) share: an
-// estimator's options for one run.
+// What the adapters of the estimators behind the common front of diff/method.h (diff/*/*_method.cpp) share:
+// an estimator's options for one run.
 #pragma once
 #include "diff/method.h"
 #include "render/integrator_settings.h"

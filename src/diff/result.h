@@ -1,6 +1,7 @@
-// What every derivative estimator returns, and the front of diff/method.h with it: a derivative image (forward
-// mode) or a gradient (reverse mode), each with the one line that describes how it was estimated, what the
-// estimate leaves out (warnings, for the user) and the deterministic count of the work (diff/sample_cost.h).
+// What every derivative estimator returns, and the front of diff/method.h with it: a derivative image
+// (forward mode) or a gradient (reverse mode), each with the one line that describes how it was estimated,
+// what the estimate leaves out (warnings, for the user) and the deterministic count of the work
+// (diff/sample_cost.h).
 #pragma once
 #include "core/error.h"
 #include "core/image.h"
@@ -25,7 +26,8 @@ struct DerivativeImage {
     Image derivative; // dI/dθ along params.direction()
     Image stderr_img; // per-pixel standard error of `derivative` (empty with a single batch)
     Image primal;     // the image estimated from the same samples (detached values; may be empty)
-    std::vector<DerivativeTerm> terms; // the method's terms separately (`penumbra derivative --terms`), or none
+    std::vector<DerivativeTerm>
+        terms; // the method's terms separately (`penumbra derivative --terms`), or none
     // dpm: the standard error of the image's mean from the spread of the batches' means (its pixels share
     // photons: their errors correlate); 0 elsewhere.
     double mean_stderr = 0;
@@ -48,7 +50,7 @@ struct Gradient {
     std::vector<std::vector<double>> batch_values;
     Image primal; // the image estimated on the way (may be empty)
     std::string description;
-    std::vector<std::string> warnings; // what the estimate leaves out, for the user
+    std::vector<std::string> warnings;                      // what the estimate leaves out, for the user
     double loss = std::numeric_limits<double>::quiet_NaN(); // a loss gradient: the loss of its primal image
     double seconds = 0;
     SampleCost cost; // cost.dropped: the NaN policy's count (diff/method.h)

@@ -274,8 +274,8 @@ std::vector<double> InverseProblem::gradient(const Image& adjoint, DerivativeMet
     return to_tangent(g, description);
 }
 
-std::vector<double> InverseProblem::loss_gradient(const Image& target, LossKind loss, DerivativeMethod& method,
-                                                  const MethodRun& run, Gradient& g,
+std::vector<double> InverseProblem::loss_gradient(const Image& target, LossKind loss,
+                                                  DerivativeMethod& method, const MethodRun& run, Gradient& g,
                                                   std::string* description) const {
     g = method.loss_gradient(scene_, *params_, target, loss, run);
     return to_tangent(g, description);

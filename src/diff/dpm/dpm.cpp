@@ -51,7 +51,8 @@ std::vector<std::string> settings_warnings(const Scene& scene) {
 std::string describe(const DpmOptions& o) {
     char text[160];
     std::snprintf(text, sizeof(text), "differentiable photon mapping (%s), %g of the pixels, %d path%s each",
-                  o.variant == DpmVariant::C ? "DPM-C, fixed eye rays" : "DPM-G, fixed density + vertex merging",
+                  o.variant == DpmVariant::C ? "DPM-C, fixed eye rays"
+                                             : "DPM-G, fixed density + vertex merging",
                   o.pixel_fraction, o.paths, o.paths == 1 ? "" : "s");
     return text;
 }

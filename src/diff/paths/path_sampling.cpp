@@ -218,8 +218,8 @@ Gradient path_sampling_gradient(const Scene& scene, const Parameters& params, co
     return g;
 }
 
-Gradient path_sampling_loss_gradient(const Scene& scene, const Parameters& params, const Image& target, LossKind loss,
-                                     const PathSamplingOptions& o) {
+Gradient path_sampling_loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
+                                     LossKind loss, const PathSamplingOptions& o) {
     check_path_sampling(scene, params, o);
     check_size(scene, target, "the target image");
     if (!(o.primal_fraction > 0.0 && o.primal_fraction < 1.0))
@@ -243,8 +243,8 @@ Gradient path_sampling_loss_gradient(const Scene& scene, const Parameters& param
         const LossResult l = compute_loss(loss, first.primal, target);
         const PixelBudget budget = o.adaptive ? adaptive_budget(l.adjoint, spp_gradient, o.defensive)
                                               : uniform_budget(film.width, film.height, spp_gradient);
-        PassResult r = run_pass(scene, params, settings_of(o), budget, seed, o.threads, Mode::Reverse, &l.adjoint,
-                                batch_progress(o, b));
+        PassResult r = run_pass(scene, params, settings_of(o), budget, seed, o.threads, Mode::Reverse,
+                                &l.adjoint, batch_progress(o, b));
         gradients.push_back(std::move(r.gradient));
         out.loss += l.value / double(o.batches);
         out.primal = first.primal;

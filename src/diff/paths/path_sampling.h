@@ -56,7 +56,7 @@ DerivativeImage path_sampling_derivative(const Scene& scene, const Parameters& p
 Gradient path_sampling_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                                 const PathSamplingOptions& options);
 // The loss is the mean of pass 1's over the batches, the primal pass 1's image of the last batch.
-Gradient path_sampling_loss_gradient(const Scene& scene, const Parameters& params, const Image& target, LossKind loss,
-                                     const PathSamplingOptions& options);
+Gradient path_sampling_loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
+                                     LossKind loss, const PathSamplingOptions& options);
 
 } // namespace penumbra

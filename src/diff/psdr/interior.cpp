@@ -104,7 +104,7 @@ void set_interior_samples(PixelLoop& loop, std::shared_ptr<const MaterialForm> f
     });
 }
 
-// The results as the method `interior` shows them: "interior term (unidirectional), image-space first vertex".
+// The results' term name and description ("interior term (unidirectional), image-space first vertex").
 void describe_interior(PixelLoop& loop, const DiffOptions& options) {
     const bool bidirectional = bidirectional_interior(loop.scene, options.estimator);
     const bool image_space = image_space_first_vertex(loop.scene, loop.params, options.first_vertex);

@@ -75,7 +75,8 @@ private:
 
 // "interior + boundary terms (interior 12, primary 1500, ... spp, image-space first vertex, calibrated)".
 std::string describe(const PsdrOptions& options) {
-    return "interior + boundary terms (" + describe_budget(options) + (options.calibrated ? ", calibrated)" : ")");
+    return "interior + boundary terms (" + describe_budget(options) +
+           (options.calibrated ? ", calibrated)" : ")");
 }
 
 } // namespace
@@ -99,9 +100,10 @@ DerivativeImage psdr_derivative(const Scene& scene, const Parameters& params, co
     for (size_t k = 1; k < terms.size(); ++k) {
         const BoundaryTerms::Term& t = boundary.terms()[k - 1];
         const auto term_start = std::chrono::steady_clock::now();
-        boundary_batches(scene, params, options, t.estimator, t.spp, t.salt, terms[k].derivative, terms[k].stderr_img,
-                         terms[k].cost);
-        terms[k].seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - term_start).count();
+        boundary_batches(scene, params, options, t.estimator, t.spp, t.salt, terms[k].derivative,
+                         terms[k].stderr_img, terms[k].cost);
+        terms[k].seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - term_start).count();
     }
     out.derivative = terms[0].derivative;
     const bool have_se = options.interior.batches > 1;
@@ -118,8 +120,8 @@ DerivativeImage psdr_derivative(const Scene& scene, const Parameters& params, co
             }
         }
         if (have_se)
-            out.stderr_img.pixels[i] =
-                Color3f(float(std::sqrt(variance.x)), float(std::sqrt(variance.y)), float(std::sqrt(variance.z)));
+            out.stderr_img.pixels[i] = Color3f(float(std::sqrt(variance.x)), float(std::sqrt(variance.y)),
+                                               float(std::sqrt(variance.z)));
     }
     const bool pixel_term = needs_pixel_boundary(scene, params, options.interior.first_vertex);
     for (size_t k = 0; k < terms.size(); ++k) {

@@ -24,14 +24,16 @@ struct PsdrOptions {
     bool guiding = true;      // contrast-guided sampling of the primary term's edges (always mixed with uniform)
     bool volume_boundary = true; // boundary segments may end at medium vertices (false: surface endpoints only,
                                  // the DTRT-like baseline that misses shadow sheets in media)
-    bool calibrated = false;  // the split came from a calibration pass (diff/psdr/budget.h; the description says so)
+    bool calibrated =
+        false; // the split came from a calibration pass (diff/psdr/budget.h; the description says so)
 };
 
 // The terms' names, in the order of the derivative's terms.
 inline constexpr std::array<const char*, 5> PsdrTermNames = {"interior", "primary", "direct", "indirect", "pixel"};
 
-// The total (interior + boundary) with each term's image, standard error and cost in the order of PsdrTermNames;
-// the pixel term only where it applies (needs_pixel_boundary). Standard errors combine the terms' (independent).
+// The total (interior + boundary) with each term's image, standard error and cost in the order of
+// PsdrTermNames; the pixel term only where it applies (needs_pixel_boundary). Standard errors combine the
+// terms' (independent).
 DerivativeImage psdr_derivative(const Scene& scene, const Parameters& params, const PsdrOptions& options);
 Gradient psdr_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const PsdrOptions& options);
 

@@ -30,7 +30,8 @@ class WarMethod final : public DerivativeMethod {
     Gradient estimate_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                                const MethodRun& run) override {
         const WarOptions o = run_options(base_, scene, run, 1);
-        return bidirectional_ ? war_bdpt_gradient(scene, params, adjoint, o) : war_gradient(scene, params, adjoint, o);
+        return bidirectional_ ? war_bdpt_gradient(scene, params, adjoint, o)
+                              : war_gradient(scene, params, adjoint, o);
     }
 
   private:

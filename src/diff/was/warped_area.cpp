@@ -388,8 +388,9 @@ std::string describe_was(const WasOptions& o) {
     char kappa[32];
     std::snprintf(kappa, sizeof(kappa), "%g", double(o.warp.weight.kappa));
     return std::string(o.warp.unbiased ? "unbiased" : "consistent") + " warped-area sampling, " +
-           (o.warp.unbiased ? "N' ~ Geom" : "N' = " + std::to_string(o.warp.aux_count)) + ", kappa = " + kappa +
-           (o.warp.antithetic ? ", antithetic" : "") + (o.control_variate ? ", control variate" : "");
+           (o.warp.unbiased ? "N' ~ Geom" : "N' = " + std::to_string(o.warp.aux_count)) +
+           ", kappa = " + kappa + (o.warp.antithetic ? ", antithetic" : "") +
+           (o.control_variate ? ", control variate" : "");
 }
 
 // The loop of was: its tiles (with the control variate in forward mode unless disabled or the filter is a
