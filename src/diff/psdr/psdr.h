@@ -24,8 +24,7 @@ struct PsdrOptions {
     bool guiding = true;      // contrast-guided sampling of the primary term's edges (always mixed with uniform)
     bool volume_boundary = true; // boundary segments may end at medium vertices (false: surface endpoints only,
                                  // the DTRT-like baseline that misses shadow sheets in media)
-    bool calibrated =
-        false; // the split came from a calibration pass (diff/psdr/budget.h; the description says so)
+    bool calibrated = false;  // the split came from psdr_budget (diff/psdr/budget.h); the description says so
 };
 
 // The terms' names, in the order of the derivative's terms.
