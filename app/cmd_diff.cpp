@@ -152,15 +152,15 @@ void cmd_derivative(const Common& c) {
     if (!c.adjoint.empty()) run.importance = &importance;
     ProgressBar bar(!c.quiet, "derivative");
     run.progress = bar.callback();
-    const MethodDerivative d = method->derivative(*scene, params, run);
+    const DerivativeImage d = method->derivative(*scene, params, run);
     for (const std::string& w : d.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     write_signed(c.output, d.derivative);
     if (!c.stderr_output.empty()) write_image(c.stderr_output, d.stderr_img);
     // Each term's image (and, with --stderr, its standard error as PREFIX_<term>_stderr.exr).
     if (!c.terms_prefix.empty())
-        for (const MethodTerm& t : d.terms) {
+        for (const DerivativeTerm& t : d.terms) {
             const std::string name = c.terms_prefix + "_" + t.name;
-            write_signed(name + lower_extension(c.output), t.value);
+            write_signed(name + lower_extension(c.output), t.derivative);
             if (!c.stderr_output.empty() && !t.stderr_img.pixels.empty())
                 write_image(name + "_stderr.exr", t.stderr_img);
         }
@@ -200,7 +200,7 @@ void cmd_gradient(const Common& c) {
     MethodRun run = method_run(c, 1);
     ProgressBar bar(!c.quiet, "gradient");
     run.progress = bar.callback();
-    MethodGradient g;
+    Gradient g;
     if (!c.target.empty()) {
         g = method->loss_gradient(*scene, params, read_image(c.target, false), parse_loss_kind(c.loss), run);
         out["loss"] = g.loss;
@@ -211,7 +211,7 @@ void cmd_gradient(const Common& c) {
     out["method"] = c.method + ": " + g.description;
     for (const std::string& w : g.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     out["warnings"] = g.warnings;
-    out["dropped_samples"] = g.dropped_samples;
+    out["dropped_samples"] = g.cost.dropped;
     out["seconds"] = g.seconds;
     out["spp"] = c.spp;
     for (const auto& [p, index] : params.enabled()) {

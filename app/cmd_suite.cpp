@@ -89,19 +89,21 @@ Row run_scene(const SuiteOptions& o, const AdSuite& suite, const AdSuiteScene& s
     if (!o.quiet) std::fprintf(stderr, "%s: derivative (%d spp, psdr_budget split)\n", s.name.c_str(), s.spp);
     ProgressBar bar(!o.quiet, s.name + " derivative");
     const auto start = std::chrono::steady_clock::now();
-    const PsdrDerivative d = suite_derivative(*c.scene, *c.params, s.spp, DerivativeSeed, o.threads, bar.callback());
+    const DerivativeImage d =
+        suite_derivative(*c.scene, *c.params, s.spp, DerivativeSeed, o.threads, bar.callback());
     row.derivative_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    row.score = score(d.total, d.total_stderr, ref.fd);
-    row.interior_relerr4 = score(d.interior.derivative, d.interior.stderr_img, ref.fd).blocks.relerr;
+    row.score = score(d.derivative, d.stderr_img, ref.fd);
+    const DerivativeTerm& interior = d.term("interior");
+    row.interior_relerr4 = score(interior.derivative, interior.stderr_img, ref.fd).blocks.relerr;
 
     // Pictures on one color scale (the reference's), and the values for `penumbra compare`.
     const std::string base = (fs::path(o.cache) / s.name).string();
     const float scale = robust_scale(ref.fd.derivative);
-    write_signed(base + "_derivative.png", d.total, scale);
+    write_signed(base + "_derivative.png", d.derivative, scale);
     write_signed(base + "_fd.png", ref.fd.derivative, scale);
-    write_z_map(base + "_z.png", d.total, ref.fd.derivative, d.total_stderr, ref.fd.stderr_img);
-    write_image(base + "_derivative.exr", d.total);
-    write_image(base + "_derivative_stderr.exr", d.total_stderr);
+    write_z_map(base + "_z.png", d.derivative, ref.fd.derivative, d.stderr_img, ref.fd.stderr_img);
+    write_image(base + "_derivative.exr", d.derivative);
+    write_image(base + "_derivative_stderr.exr", d.stderr_img);
     return row;
 }
 

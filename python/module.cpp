@@ -265,7 +265,7 @@ PYBIND11_MODULE(_penumbra, m) {
                  const std::vector<std::vector<double>> g =
                      run_interruptible<std::vector<std::vector<double>>>([&] {
                          s.table->select(entries);
-                         MethodGradient mg = dm.gradient(*s.scene, s.table->parameters(), a, run);
+                         Gradient mg = dm.gradient(*s.scene, s.table->parameters(), a, run);
                          warnings = std::move(mg.warnings);
                          return s.table->chain(mg.values);
                      });
@@ -291,7 +291,7 @@ PYBIND11_MODULE(_penumbra, m) {
             MethodRun run = run_settings(spp, seed, threads, batches);
             run.progress = bar.callback();
             SensorScope scope(*s.scene, sensor);
-            MethodDerivative d = run_interruptible<MethodDerivative>([&] {
+            DerivativeImage d = run_interruptible<DerivativeImage>([&] {
                 s.table->select(directions);
                 return dm.derivative(*s.scene, s.table->parameters(), run);
             });

@@ -112,9 +112,9 @@ inline std::optional<FiniteDifference> stored_war_reference(const ValidationCase
 }
 
 // A method's derivative through the method front, with the given options.
-inline MethodDerivative method_derivative(const std::string& method,
-                                          const std::map<std::string, std::string>& given,
-                                          const LoadedCase& l, int spp, uint64_t seed, int batches) {
+inline DerivativeImage method_derivative(const std::string& method,
+                                         const std::map<std::string, std::string>& given, const LoadedCase& l,
+                                         int spp, uint64_t seed, int batches) {
     MethodOptions o;
     for (const auto& [k, v] : given)
         o.set(k, v);
@@ -134,13 +134,13 @@ inline void expect_reverse_matches_forward(const std::string& method, const Meth
     run.spp = 16;
     run.batches = 1;
     run.seed = 41;
-    const MethodDerivative d = m->derivative(*l.scene, *l.params, run);
+    const DerivativeImage d = m->derivative(*l.scene, *l.params, run);
     const int w = d.derivative.width, h = d.derivative.height;
     Image adjoint(w, h);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x)
             adjoint.at(x, y) = Color3f(0.3f + 0.05f * float(x), 1.f - 0.04f * float(y), 0.5f);
-    const MethodGradient g = m->gradient(*l.scene, *l.params, adjoint, run);
+    const Gradient g = m->gradient(*l.scene, *l.params, adjoint, run);
     double forward = 0, reverse = 0;
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x)
@@ -162,9 +162,9 @@ inline void expect_thread_count_invariant(const std::string& method, const Loade
     run.seed = 5;
     auto m = make_method(method, MethodOptions());
     run.threads = 1;
-    const MethodDerivative one = m->derivative(*l.scene, *l.params, run);
+    const DerivativeImage one = m->derivative(*l.scene, *l.params, run);
     run.threads = 2;
-    const MethodDerivative two = m->derivative(*l.scene, *l.params, run);
+    const DerivativeImage two = m->derivative(*l.scene, *l.params, run);
     EXPECT_EQ(one.derivative.pixels, two.derivative.pixels);
 }
 
@@ -260,7 +260,7 @@ inline void check_suite_scene(const PaperSuite& paper, const MethodCase& method,
     MethodOptions options;
     for (const auto& [key, value] : method.options)
         options.set(key, value);
-    const MethodDerivative d = make_method(method.name, options)->derivative(*c.scene, *c.params, run);
+    const DerivativeImage d = make_method(method.name, options)->derivative(*c.scene, *c.params, run);
     ASSERT_FALSE(d.terms.empty());
     const DiffCheck total = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
     std::printf("  %s at %dx%d, %s %d spp (%.2f s, %s), reference h = %g at %d spp per side (%.0f s%s)\n"
@@ -271,7 +271,7 @@ inline void check_suite_scene(const PaperSuite& paper, const MethodCase& method,
     EXPECT_TRUE(total.passes()) << describe(total);
     if (d.terms[0].name == "interior") {
         const DiffCheck interior =
-            check_against(d.terms[0].value, d.terms[0].stderr_img, fd.derivative, fd.stderr_img);
+            check_against(d.terms[0].derivative, d.terms[0].stderr_img, fd.derivative, fd.stderr_img);
         std::printf("  interior only: %s\n", describe(interior).c_str());
         EXPECT_FALSE(interior.passes())
             << "the interior term alone should miss the boundary contribution: " << describe(interior);

@@ -39,8 +39,8 @@ inline bool finite(const Image& image) {
 
 struct Outputs {
     RenderStats render;
-    MethodDerivative derivative;
-    MethodGradient gradient;
+    DerivativeImage derivative;
+    Gradient gradient;
 };
 
 // A render at `render_spp`, and the method's derivative and gradient of `param` at `spp`; every output must be

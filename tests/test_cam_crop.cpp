@@ -164,7 +164,7 @@ TEST(CamCrop, ParticleTracerRenderIsTheRegionOfTheFullRender) {
 // vertex exercises the interior term (filter gradient), the primary boundary term (silhouettes crossing the
 // window) and the pixel-boundary term; the cropped derivative must equal the region of the full film's.
 TEST(CamCrop, DerivativeIsTheRegionOfTheFullDerivative) {
-    PsdrDerivative d[2];
+    DerivativeImage d[2];
     for (int k = 0; k < 2; ++k) {
         auto scene = load_scene_string(scene_xml(Perspective, k == 1, "path", "box"));
         Parameters params(*scene);
@@ -182,14 +182,15 @@ TEST(CamCrop, DerivativeIsTheRegionOfTheFullDerivative) {
         d[k] = psdr_derivative(*scene, params, o);
     }
     double primary = 0, pixel = 0;
-    for (size_t i = 0; i < d[1].primary.pixels.size(); ++i) {
-        primary += std::abs(d[1].primary.pixels[i].x);
-        pixel += std::abs(d[1].pixel.pixels[i].x);
+    const Image &primary_term = d[1].term("primary").derivative, &pixel_term = d[1].term("pixel").derivative;
+    for (size_t i = 0; i < primary_term.pixels.size(); ++i) {
+        primary += std::abs(primary_term.pixels[i].x);
+        pixel += std::abs(pixel_term.pixels[i].x);
     }
     EXPECT_GT(primary, 0.0) << "the window must contain a silhouette";
     EXPECT_GT(pixel, 0.0) << "the pixel-boundary term must contribute";
     const DiffCheck c =
-        check_against(d[1].total, d[1].total_stderr, region(d[0].total), region(d[0].total_stderr));
+        check_against(d[1].derivative, d[1].stderr_img, region(d[0].derivative), region(d[0].stderr_img));
     std::printf("  cropped vs full derivative: %s\n", describe(c).c_str());
     EXPECT_TRUE(c.passes()) << describe(c);
     EXPECT_GT(std::abs(c.comparison.mean_ref), 1e-3) << "a weak test: the reference derivative is ~0";
@@ -208,7 +209,7 @@ TEST(CamCrop, ReverseModeMatchesForwardMode) {
     o.interior.first_vertex = FirstVertex::Material;
     o.primary_spp = o.direct_spp = o.pixel_spp = 4;
     o.indirect_spp = 0;
-    const PsdrDerivative forward = psdr_derivative(*scene, params, o);
+    const DerivativeImage forward = psdr_derivative(*scene, params, o);
     Image adjoint(CropW, CropH);
     PCG32 rng(3);
     for (auto& a : adjoint.pixels)
@@ -217,8 +218,8 @@ TEST(CamCrop, ReverseModeMatchesForwardMode) {
     double lhs = 0, scale = 0;
     for (size_t i = 0; i < adjoint.pixels.size(); ++i) {
         const Vec3d a(adjoint.pixels[i]);
-        lhs += dot(a, Vec3d(forward.total.pixels[i]));
-        scale += std::abs(dot(a, Vec3d(forward.total.pixels[i])));
+        lhs += dot(a, Vec3d(forward.derivative.pixels[i]));
+        scale += std::abs(dot(a, Vec3d(forward.derivative.pixels[i])));
     }
     EXPECT_GT(scale, 0.0);
     // Float roundoff of sums accumulated in different orders.

@@ -331,11 +331,12 @@ TEST(BoundaryMedia, PointLightTranslatingInTheFog) {
     o.primary_spp = o.indirect_spp = o.pixel_spp = 0;
     o.direct_spp = 64;
     const auto start = std::chrono::steady_clock::now();
-    const PsdrDerivative d = psdr_derivative(*scene, params, o);
+    const DerivativeImage d = psdr_derivative(*scene, params, o);
     std::printf("  psdr (interior 16 spp + direct 64 spp, 16 batches) %.2f s\n", seconds_since(start));
     const Reference r = reference(*scene, params, 2e-2, 64);
-    const DiffCheck total = report("interior + direct", {d.total, d.total_stderr}, r);
-    const DiffCheck interior = report("interior only", {d.interior.derivative, d.interior.stderr_img}, r);
+    const DiffCheck total = report("interior + direct", {d.derivative, d.stderr_img}, r);
+    const DiffCheck interior =
+        report("interior only", {d.term("interior").derivative, d.term("interior").stderr_img}, r);
     EXPECT_TRUE(total.passes()) << describe(total);
     EXPECT_FALSE(interior.passes()) << "the interior term alone must miss the moving shadows: "
                                     << describe(interior);

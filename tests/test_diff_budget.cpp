@@ -13,10 +13,12 @@ namespace {
 const std::string validation = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/validation/";
 
 // Σ per-pixel variance of the total times the work it took: the inverse efficiency of a split.
-double variance_times_cost(const PsdrDerivative& d) {
+double variance_times_cost(const DerivativeImage& d) {
     double variance = 0, cost = 0;
-    for (const Color3f& s : d.total_stderr.pixels) variance += double(s.x) * s.x + double(s.y) * s.y + double(s.z) * s.z;
-    for (const SampleCost& c : d.cost) cost += c.units();
+    for (const Color3f& s : d.stderr_img.pixels)
+        variance += double(s.x) * s.x + double(s.y) * s.y + double(s.z) * s.z;
+    for (const DerivativeTerm& t : d.terms)
+        cost += t.cost.units();
     return variance * cost;
 }
 
@@ -60,8 +62,9 @@ TEST(Budget, SameSplitAndImageForAnyThreadCount) {
     two.interior.threads = 2;
     const PsdrOptions a = psdr_budget(*scene, params, one, 64), b = psdr_budget(*scene, params, two, 64);
     EXPECT_EQ(describe_budget(a), describe_budget(b));
-    const PsdrDerivative da = psdr_derivative(*scene, params, a), db = psdr_derivative(*scene, params, b);
-    for (size_t i = 0; i < da.total.pixels.size(); ++i) ASSERT_EQ(da.total.pixels[i], db.total.pixels[i]) << "pixel " << i;
+    const DerivativeImage da = psdr_derivative(*scene, params, a), db = psdr_derivative(*scene, params, b);
+    for (size_t i = 0; i < da.derivative.pixels.size(); ++i)
+        ASSERT_EQ(da.derivative.pixels[i], db.derivative.pixels[i]) << "pixel " << i;
 }
 
 // Reverse mode: the split for a gradient, and the gradient with it, are those of the same calibration.

@@ -70,12 +70,12 @@ TEST_P(MediaScene, MatchesFiniteDifferences) {
     run.spp = s.spp;
     run.batches = DerivativeBatches;
     run.seed = 1 + 1000 * seed;
-    const MethodDerivative d = make_method("psdr", MethodOptions())->derivative(*c.scene, *c.params, run);
+    const DerivativeImage d = make_method("psdr", MethodOptions())->derivative(*c.scene, *c.params, run);
     ASSERT_FALSE(d.terms.empty());
     ASSERT_EQ(d.terms[0].name, "interior");
     const DiffCheck total = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
     const DiffCheck interior =
-        check_against(d.terms[0].value, d.terms[0].stderr_img, fd.derivative, fd.stderr_img);
+        check_against(d.terms[0].derivative, d.terms[0].stderr_img, fd.derivative, fd.stderr_img);
     std::printf("  %s at %dx%d, psdr %d spp (%.2f s, %s), reference h = %g at %d spp per side (%.0f s%s)\n"
                 "  psdr:          %s\n  interior only: %s\n",
                 s.name.c_str(), s.ci_res, s.ci_res, s.spp, d.seconds, d.description.c_str(), ref.eps, ref.spp,
@@ -105,13 +105,14 @@ void expect_reverse_matches_forward(const std::string& name, int res, int interi
         o.interior.path = path_settings(*c.scene);
         o.primary_spp = o.direct_spp = o.indirect_spp = boundary_spp;
         o.pixel_spp = 0;
-        const PsdrDerivative forward = psdr_derivative(*c.scene, *c.params, o);
+        const DerivativeImage forward = psdr_derivative(*c.scene, *c.params, o);
         Image adjoint(res, res);
         PCG32 rng(3);
         for (auto& a : adjoint.pixels)
             a = Color3f(rng.next_float(), rng.next_float(), rng.next_float());
         const Gradient reverse = psdr_gradient(*c.scene, *c.params, adjoint, o);
-        const AdjointPair p = adjoint_pair(adjoint, forward.total, reverse.values, c.params->direction());
+        const AdjointPair p =
+            adjoint_pair(adjoint, forward.derivative, reverse.values, c.params->direction());
         std::printf("  %s: <a, Jv> = %.6g, <J^T a, v> = %.6g (scale %.3g)\n", name.c_str(), p.forward,
                     p.reverse, p.scale);
         EXPECT_GT(p.scale, 0.0) << "a zero derivative tests nothing";

@@ -134,7 +134,7 @@ TEST(PathSampling, ForwardAndReverseModeAreAdjoint) {
     o.batches = 1;
     o.adaptive = true;
     const DerivativeImage forward = path_sampling_derivative(*scene, params, o, adjoint);
-    const SampledGradient reverse = path_sampling_gradient(*scene, params, adjoint, o);
+    const Gradient reverse = path_sampling_gradient(*scene, params, adjoint, o);
     const AdjointPair p = adjoint_pair(adjoint, forward.derivative, reverse.values, params.direction());
     EXPECT_NEAR(p.forward, p.reverse, 1e-4 * p.scale) << "⟨a, Jv⟩ = " << p.forward << ", ⟨Jᵀa, v⟩ = " << p.reverse;
     EXPECT_GT(p.scale, 1e-4);
@@ -168,7 +168,7 @@ TEST(PathSampling, AdaptiveLossGradientMatchesFiniteDifferences) {
         PathSamplingOptions o = options(*scene, differential, true);
         o.spp = 8;
         o.adaptive = true;
-        const LossGradient g = path_sampling_loss_gradient(*scene, params, target.mean, LossKind::L2, o);
+        const Gradient g = path_sampling_loss_gradient(*scene, params, target.mean, LossKind::L2, o);
         // dL/dθ along the parameter's direction, per batch (the three scalars come from the same paths).
         std::vector<double> batch;
         for (const auto& values : g.batch_values) {
@@ -198,9 +198,9 @@ TEST(PathSampling, SameResultForAnyThreadCount) {
     o.spp = 2;
     o.batches = 1;
     o.threads = 1;
-    const SampledGradient one = path_sampling_gradient(*scene, params, adjoint, o);
+    const Gradient one = path_sampling_gradient(*scene, params, adjoint, o);
     o.threads = 2;
-    const SampledGradient two = path_sampling_gradient(*scene, params, adjoint, o);
+    const Gradient two = path_sampling_gradient(*scene, params, adjoint, o);
     EXPECT_EQ(one.values, two.values);
 }
 

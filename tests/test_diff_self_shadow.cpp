@@ -29,7 +29,7 @@ std::vector<float> deformation_field(const Parameter& positions) {
 }
 
 struct SelfShadowRun {
-    PsdrDerivative d;
+    DerivativeImage d;
     FiniteDifference fd;
     Image fd_error; // the reference's per-pixel standard error, with its detection limit and truncation error (diff_check.h)
 };
@@ -55,15 +55,17 @@ SelfShadowRun run(const std::string& light, int interior_spp, int primary_spp, i
     ro.seed = 99 + 1000 * seed;
     r.fd = finite_difference(*scene, params, h, ro, 16);
     r.fd_error = with_truncation_error(
-        with_detection_limit(r.fd, r.d.interior.primal, h, fd_spp * 16, scene->sensor->film->rfilter->radius()), r.fd,
+        with_detection_limit(r.fd, r.d.primal, h, fd_spp * 16, scene->sensor->film->rfilter->radius()), r.fd,
         finite_difference(*scene, params, 2 * h, ro, 16));
     return r;
 }
 
 // interior + s × (boundary terms)
-Image with_boundary_scaled(const PsdrDerivative& d, float s) {
-    Image out = d.interior.derivative;
-    for (size_t i = 0; i < out.pixels.size(); ++i) out.pixels[i] += (d.total.pixels[i] - d.interior.derivative.pixels[i]) * s;
+Image with_boundary_scaled(const DerivativeImage& d, float s) {
+    const Image& interior = d.term("interior").derivative;
+    Image out = interior;
+    for (size_t i = 0; i < out.pixels.size(); ++i)
+        out.pixels[i] += (d.derivative.pixels[i] - interior.pixels[i]) * s;
     return out;
 }
 
@@ -74,9 +76,11 @@ Image with_boundary_scaled(const PsdrDerivative& d, float s) {
 // (interior term: moving points, normals and area Jacobians).
 TEST(SelfShadow, VertexPerturbationOfAConcaveMesh) {
     const SelfShadowRun r = run("area", 16, 16, 64, 256, 2e-2);
-    const DiffCheck total = check_against(r.d.total, r.d.total_stderr, r.fd.derivative, r.fd_error);
-    const DiffCheck interior = check_against(r.d.interior.derivative, r.d.interior.stderr_img, r.fd.derivative, r.fd_error);
-    const DiffCheck scaled = check_against(with_boundary_scaled(r.d, 0.8f), r.d.total_stderr, r.fd.derivative, r.fd_error);
+    const DiffCheck total = check_against(r.d.derivative, r.d.stderr_img, r.fd.derivative, r.fd_error);
+    const DiffCheck interior = check_against(r.d.term("interior").derivative, r.d.term("interior").stderr_img,
+                                             r.fd.derivative, r.fd_error);
+    const DiffCheck scaled =
+        check_against(with_boundary_scaled(r.d, 0.8f), r.d.stderr_img, r.fd.derivative, r.fd_error);
     std::printf("  self_shadow.xml (area light): interior+boundary %s\n  interior only %s\n  boundary x0.8 %s\n",
                 describe(total).c_str(), describe(interior).c_str(), describe(scaled).c_str());
     EXPECT_TRUE(total.passes()) << describe(total);
@@ -91,8 +95,9 @@ TEST(SelfShadow, VertexPerturbationOfAConcaveMesh) {
 // light at the camera clipped the occluder, L_bg read 0 on much of the floor and the image mean was off by z ~ 8.
 TEST(SelfShadow, PrimaryBoundaryOfANonRigidFieldWithTheLightAtTheCamera) {
     const SelfShadowRun r = run("camera", 32, 32, 0, 256, 2e-2);
-    const DiffCheck total = check_against(r.d.total, r.d.total_stderr, r.fd.derivative, r.fd_error);
-    const DiffCheck interior = check_against(r.d.interior.derivative, r.d.interior.stderr_img, r.fd.derivative, r.fd_error);
+    const DiffCheck total = check_against(r.d.derivative, r.d.stderr_img, r.fd.derivative, r.fd_error);
+    const DiffCheck interior = check_against(r.d.term("interior").derivative, r.d.term("interior").stderr_img,
+                                             r.fd.derivative, r.fd_error);
     std::printf("  self_shadow.xml (light at the camera): interior+primary %s\n  interior only %s\n", describe(total).c_str(),
                 describe(interior).c_str());
     EXPECT_TRUE(total.passes()) << describe(total);

@@ -109,14 +109,14 @@ void expect_terminator_matches_fd(const std::string& param) {
     params.enable({parse_param_selection(param)});
     PsdrOptions o = interior_and_primary(*scene, 8, 5 + 1000 * seed, 8);
     o.interior.batches = 16;
-    const PsdrDerivative d = psdr_derivative(*scene, params, o);
+    const DerivativeImage d = psdr_derivative(*scene, params, o);
     RenderOptions ro;
     ro.spp = 64;
     ro.seed = 77 + 1000 * seed;
     const FiniteDifference fd = finite_difference(*scene, params, 1e-2, ro, 16);
-    const DiffCheck total = check_against(d.total, d.total_stderr, fd.derivative, fd.stderr_img);
-    const DiffCheck interior =
-        check_against(d.interior.derivative, d.interior.stderr_img, fd.derivative, fd.stderr_img);
+    const DiffCheck total = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const DiffCheck interior = check_against(d.term("interior").derivative, d.term("interior").stderr_img,
+                                             fd.derivative, fd.stderr_img);
     std::printf("  %s: interior+primary %s\n  interior only %s\n", param.c_str(), describe(total).c_str(),
                 describe(interior).c_str());
     EXPECT_TRUE(total.passes()) << describe(total);
@@ -163,20 +163,20 @@ std::string icosphere_obj(int levels) {
 // result.
 struct DotProducts {
     double lhs = 0, rhs = 0, scale = 0;
-    PsdrDerivative forward;
+    DerivativeImage forward;
     Image adjoint;
 };
 DotProducts dot_products(const Scene& scene, const Parameters& params, const PsdrOptions& o, uint64_t seed) {
     DotProducts r;
     r.forward = psdr_derivative(scene, params, o);
-    r.adjoint = Image(r.forward.total.width, r.forward.total.height);
+    r.adjoint = Image(r.forward.derivative.width, r.forward.derivative.height);
     PCG32 rng(seed);
     for (auto& a : r.adjoint.pixels) a = Color3f(rng.next_float(), rng.next_float(), rng.next_float());
     const Gradient reverse = psdr_gradient(scene, params, r.adjoint, o);
     for (size_t i = 0; i < r.adjoint.pixels.size(); ++i)
         for (int k = 0; k < 3; ++k) {
-            r.lhs += double(r.adjoint.pixels[i][k]) * r.forward.total.pixels[i][k];
-            r.scale += std::abs(double(r.adjoint.pixels[i][k]) * r.forward.total.pixels[i][k]);
+            r.lhs += double(r.adjoint.pixels[i][k]) * r.forward.derivative.pixels[i][k];
+            r.scale += std::abs(double(r.adjoint.pixels[i][k]) * r.forward.derivative.pixels[i][k]);
         }
     for (size_t k = 0; k < reverse.values.size(); ++k) r.rhs += reverse.values[k] * params.direction()[k];
     return r;
@@ -302,12 +302,12 @@ TEST(SmoothNormals, IcosphereStretchedTowardAnEllipsoid) {
     o.primary_spp = 48;
     o.direct_spp = 16;
     o.indirect_spp = 0; // max_depth 2
-    const PsdrDerivative r = psdr_derivative(*scene, params, o);
+    const DerivativeImage r = psdr_derivative(*scene, params, o);
     RenderOptions ro;
     ro.spp = 192;
     ro.seed = 50 + 1000 * seed;
     const FiniteDifference fd = finite_difference(*scene, params, 2e-2, ro, 16);
-    const DiffCheck c = check_against(r.total, r.total_stderr, fd.derivative, fd.stderr_img);
+    const DiffCheck c = check_against(r.derivative, r.stderr_img, fd.derivative, fd.stderr_img);
     std::printf("  icosphere: %s\n", describe(c).c_str());
     EXPECT_TRUE(c.passes()) << describe(c);
 }
@@ -322,8 +322,10 @@ TEST(ShadingTerminator, ReverseModeMatchesForwardMode) {
     PsdrOptions o = interior_and_primary(*scene, 4, 5, 8);
     const DotProducts r = dot_products(*scene, params, o, 3);
     double primary = 0;
+    const Image& primary_term = r.forward.term("primary").derivative;
     for (size_t i = 0; i < r.adjoint.pixels.size(); ++i)
-        for (int k = 0; k < 3; ++k) primary += std::abs(double(r.adjoint.pixels[i][k]) * r.forward.primary.pixels[i][k]);
+        for (int k = 0; k < 3; ++k)
+            primary += std::abs(double(r.adjoint.pixels[i][k]) * primary_term.pixels[i][k]);
     EXPECT_GT(primary, 0.5 * r.scale) << "the terminator should carry most of this derivative";
     EXPECT_NEAR(r.lhs, r.rhs, 1e-4 * r.scale + 1e-6);
 }

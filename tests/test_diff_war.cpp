@@ -41,7 +41,7 @@ FiniteDifference reference(const ValidationCase& c, LoadedCase& l) {
     return fd;
 }
 
-MethodDerivative war(const LoadedCase& l, int spp, uint64_t seed, int aux) {
+DerivativeImage war(const LoadedCase& l, int spp, uint64_t seed, int aux) {
     return method_derivative("war", {{"war-aux", std::to_string(aux)}}, l, spp, seed, 16);
 }
 
@@ -68,7 +68,7 @@ TEST_P(WarBoundaryScenes, MatchesFiniteDifferences) {
     const uint64_t seed = test_seed();
     LoadedCase l = load(c);
     const FiniteDifference fd = reference(c, l);
-    const MethodDerivative d = war(l, Spp, 3 + 1000 * seed, aux(c));
+    const DerivativeImage d = war(l, Spp, 3 + 1000 * seed, aux(c));
     const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
     std::printf("  %s, %d spp in %.1f s: %s\n", c.label.c_str(), Spp, d.seconds, describe(check).c_str());
     EXPECT_TRUE(check.passes()) << describe(check);
@@ -81,8 +81,8 @@ INSTANTIATE_TEST_SUITE_P(Validation, WarBoundaryScenes, testing::ValuesIn(cases)
 // war at N_q = 16, the faster setting, which passes here).
 TEST(WarBoundaryScenes, AgreesWithPsdr) {
     LoadedCase l = load(cases[5]);
-    const MethodDerivative w = war(l, Spp, 21, 16);
-    const MethodDerivative p = method_derivative("psdr", {}, l, Spp, 22, 16);
+    const DerivativeImage w = war(l, Spp, 21, 16);
+    const DerivativeImage p = method_derivative("psdr", {}, l, Spp, 22, 16);
     const DiffCheck check = check_against(w.derivative, w.stderr_img, p.derivative, p.stderr_img);
     std::printf("  war against psdr: %s\n", describe(check).c_str());
     EXPECT_TRUE(check.passes()) << describe(check);

@@ -21,8 +21,8 @@ constexpr int Spp = 1024;
 
 LoadedCase load(const ValidationCase& c, int res = 16) { return load_validation(c, res); }
 
-MethodDerivative was(const LoadedCase& l, int spp, const std::map<std::string, std::string>& given,
-                     uint64_t seed) {
+DerivativeImage was(const LoadedCase& l, int spp, const std::map<std::string, std::string>& given,
+                    uint64_t seed) {
     return method_derivative("was", given, l, spp, seed, 16);
 }
 
@@ -52,7 +52,7 @@ TEST_P(WasBoundaryScenes, MatchesFiniteDifferences) {
     ro.spp = c.fd_spp;
     ro.seed = 99 + 1000 * seed;
     const FiniteDifference fd = finite_difference(*l.scene, *l.params, c.h, ro, 16);
-    const MethodDerivative d = was(l, Spp, {}, 3 + 1000 * seed);
+    const DerivativeImage d = was(l, Spp, {}, 3 + 1000 * seed);
     const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
     std::printf("  %s (%s), %d spp in %.1f s: %s\n", c.label.c_str(), d.description.c_str(), Spp, d.seconds,
                 describe(check).c_str());
@@ -73,7 +73,7 @@ TEST(WasUnbiased, MatchesFiniteDifferences) {
         ro.spp = c.fd_spp;
         ro.seed = 99 + 1000 * seed;
         const FiniteDifference fd = finite_difference(*l.scene, *l.params, c.h, ro, 16);
-        const MethodDerivative d = was(l, 2 * Spp, {{"was-unbiased", "true"}}, 5 + 1000 * seed);
+        const DerivativeImage d = was(l, 2 * Spp, {{"was-unbiased", "true"}}, 5 + 1000 * seed);
         const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
         std::printf("  %s (%s), %d spp in %.1f s: %s\n", c.label.c_str(), d.description.c_str(), 2 * Spp,
                     d.seconds, describe(check).c_str());
@@ -84,8 +84,8 @@ TEST(WasUnbiased, MatchesFiniteDifferences) {
 // was and psdr estimate the same derivative: their difference is noise (the shadow under the area light).
 TEST(WasBoundaryScenes, AgreesWithPsdr) {
     LoadedCase l = load(cases[1]);
-    const MethodDerivative w = was(l, Spp, {}, 21);
-    const MethodDerivative p = method_derivative("psdr", {}, l, Spp, 22, 16);
+    const DerivativeImage w = was(l, Spp, {}, 21);
+    const DerivativeImage p = method_derivative("psdr", {}, l, Spp, 22, 16);
     const DiffCheck check = check_against(w.derivative, w.stderr_img, p.derivative, p.stderr_img);
     std::printf("  was against psdr: %s\n", describe(check).c_str());
     EXPECT_TRUE(check.passes()) << describe(check);
@@ -120,7 +120,7 @@ double mean_variance(const Image& stderr_img, int margin) {
     return sum / n;
 }
 
-MethodDerivative flat_derivative(int tilt, const std::map<std::string, std::string>& given) {
+DerivativeImage flat_derivative(int tilt, const std::map<std::string, std::string>& given) {
     LoadedCase l;
     l.scene = flat_emitter(tilt);
     l.params = std::make_unique<Parameters>(*l.scene);
@@ -132,8 +132,8 @@ MethodDerivative flat_derivative(int tilt, const std::map<std::string, std::stri
 // 2 px from the film's edge, whose cut filters are left without it), and the estimate stays unbiased.
 TEST(WasVarianceReduction, ControlVariateOnTheFlatEmitter) {
     for (const int tilt : {0, 40}) {
-        const MethodDerivative with = flat_derivative(tilt, {});
-        const MethodDerivative without = flat_derivative(tilt, {{"no-control-variate", "true"}});
+        const DerivativeImage with = flat_derivative(tilt, {});
+        const DerivativeImage without = flat_derivative(tilt, {{"no-control-variate", "true"}});
         const double v_with = mean_variance(with.stderr_img, 2),
                      v_without = mean_variance(without.stderr_img, 2);
         const Comparison zero = compare_images(with.derivative, Image(16, 16), with.stderr_img);

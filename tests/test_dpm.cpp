@@ -90,7 +90,7 @@ DiffCheck run_case(const Case& c, DerivativeImage* out = nullptr) {
     o.pixel_fraction = 1.0;
     o.paths = 8;
     o.seed = 11 + 1000 * test_seed();
-    const DerivativeImage d = dpm_derivative(*scene, params, o).image;
+    const DerivativeImage d = dpm_derivative(*scene, params, o);
     RenderOptions ro;
     ro.spp = 4;
     ro.seed = 5 + 1000 * test_seed();
@@ -164,15 +164,16 @@ TEST_P(DpmG, ScreenSpaceMotionMatchesTheCentroidsFiniteDifference) {
     o.pixel_fraction = 1.0;
     o.paths = 8;
     o.seed = 11 + 1000 * test_seed();
-    const DpmDerivative g = dpm_derivative(*scene, params, o);
+    const DerivativeImage g = dpm_derivative(*scene, params, o);
+    const DerivativeTerm &screen_x = g.term("screen_x"), &screen_y = g.term("screen_y");
     RenderOptions ro;
     ro.spp = 4;
     ro.seed = 5 + 1000 * test_seed();
     const FiniteDifference fd = finite_difference(*scene, params, 0.01, ro, 16);
-    const Centroid test = centroid_motion(g.image.primal, g.image.derivative, g.image.stderr_img, &g.screen_x,
-                                          &g.screen_y, &g.screen_x_stderr, &g.screen_y_stderr);
+    const Centroid test = centroid_motion(g.primal, g.derivative, g.stderr_img, &screen_x.derivative,
+                                          &screen_y.derivative, &screen_x.stderr_img, &screen_y.stderr_img);
     const Centroid ref =
-        centroid_motion(g.image.primal, fd.derivative, fd.stderr_img, nullptr, nullptr, nullptr, nullptr);
+        centroid_motion(g.primal, fd.derivative, fd.stderr_img, nullptr, nullptr, nullptr, nullptr);
     const std::string what = "DPM-G (" + std::to_string(test.dx) + ", " + std::to_string(test.dy) + ") ± (" +
                              std::to_string(test.se_x) + ", " + std::to_string(test.se_y) + "), FD (" +
                              std::to_string(ref.dx) + ", " + std::to_string(ref.dy) + ") ± (" +
@@ -182,7 +183,7 @@ TEST_P(DpmG, ScreenSpaceMotionMatchesTheCentroidsFiniteDifference) {
     // The caustic moves by pixels per unit (the test sees a motion), and both EPSMs carry part of it.
     EXPECT_GT(std::hypot(ref.dx, ref.dy), 20 * std::hypot(ref.se_x, ref.se_y)) << what;
     const Centroid contribution_only =
-        centroid_motion(g.image.primal, g.image.derivative, g.image.stderr_img, nullptr, nullptr, nullptr, nullptr);
+        centroid_motion(g.primal, g.derivative, g.stderr_img, nullptr, nullptr, nullptr, nullptr);
     EXPECT_GT(std::abs(contribution_only.dx - test.dx) + std::abs(contribution_only.dy - test.dy),
               0.2 * std::hypot(ref.dx, ref.dy))
         << what;
@@ -214,9 +215,9 @@ TEST_P(DpmCStored, MatchesStoredFiniteDifferences) {
     o.pixel_fraction = 1.0;
     o.paths = c.paths;
     o.seed = 21 + 1000 * test_seed();
-    const DpmDerivative d = dpm_derivative(*scene, params, o);
+    const DerivativeImage d = dpm_derivative(*scene, params, o);
     const std::string ref = root + "tests/data/dpm/" + c.reference;
-    const DiffCheck check = check_against(d.image.derivative, d.image.stderr_img, read_image(ref + ".exr", false),
+    const DiffCheck check = check_against(d.derivative, d.stderr_img, read_image(ref + ".exr", false),
                                           read_image(ref + "_stderr.exr", false));
     // The image mean's z from the spread of the batch means (pixels share photons: their errors correlate);
     // the reference's share, from its pixels, is the smaller by an order of magnitude.
@@ -252,7 +253,7 @@ ForwardAndReverse expect_reverse_equals_forward(const Scene& scene, const Parame
     o.spp = 4;
     o.pixel_fraction = 0.5;
     o.paths = 2;
-    ForwardAndReverse r{dpm_derivative(scene, params, o).image, {}};
+    ForwardAndReverse r{dpm_derivative(scene, params, o), {}};
     Image adjoint(16, 16);
     for (size_t i = 0; i < adjoint.pixels.size(); ++i)
         adjoint.pixels[i] = Color3f(float(i % 7) - 3.f, 1.f, float(i % 3));
@@ -320,9 +321,9 @@ TEST(DpmC, SameResultWhateverTheThreadCount) {
     o.spp = 2;
     o.pixel_fraction = 0.25;
     o.threads = 1;
-    const DerivativeImage one = dpm_derivative(*scene, params, o).image;
+    const DerivativeImage one = dpm_derivative(*scene, params, o);
     o.threads = 2;
-    const DerivativeImage two = dpm_derivative(*scene, params, o).image;
+    const DerivativeImage two = dpm_derivative(*scene, params, o);
     double sum = 0;
     for (size_t i = 0; i < one.derivative.pixels.size(); ++i) {
         EXPECT_EQ(one.derivative.pixels[i], two.derivative.pixels[i]);

@@ -110,7 +110,7 @@ TEST(DpmDemos, EggMatchingGradientVanishesAtTheSolution) {
         options.pixel_fraction = 1;
         options.paths = 1;
         options.seed = 1 + k + 1000 * test::test_seed();
-        const double g = dpm_matching_gradient(*scene, params, target, options).gradient.values.at(0);
+        const double g = dpm_matching_gradient(*scene, params, target, options).values.at(0);
         sum += g;
         sum2 += g * g;
     }

@@ -363,14 +363,15 @@ TEST(FilmOptions, FilmEdgeTermUnderCameraMotion) {
     o.interior.path = path_settings(*scene);
     o.primary_spp = o.direct_spp = o.indirect_spp = 0;
     o.pixel_spp = 256;
-    const PsdrDerivative d = psdr_derivative(*scene, params, o);
+    const DerivativeImage d = psdr_derivative(*scene, params, o);
     RenderOptions ro;
     ro.spp = 512;
     ro.seed = 17;
     const FiniteDifference fd = finite_difference(*scene, params, 1e-2, ro, 16);
-    const test::DiffCheck total = test::check_against(d.total, d.total_stderr, fd.derivative, fd.stderr_img);
-    const test::DiffCheck interior =
-        test::check_against(d.interior.derivative, d.interior.stderr_img, fd.derivative, fd.stderr_img);
+    const test::DiffCheck total =
+        test::check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const test::DiffCheck interior = test::check_against(
+        d.term("interior").derivative, d.term("interior").stderr_img, fd.derivative, fd.stderr_img);
     std::printf("  film edge, cam.translate: interior+pixel %s\n  interior only %s\n",
                 test::describe(total).c_str(), test::describe(interior).c_str());
     EXPECT_TRUE(total.passes()) << test::describe(total);

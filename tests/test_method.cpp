@@ -88,25 +88,25 @@ TEST(Method, PsdrAdapterIsTheEstimator) {
     run.spp = 8;
     run.batches = 2;
     run.seed = 11;
-    const MethodDerivative d = make_method("psdr", given)->derivative(*scene, params, run);
+    const DerivativeImage d = make_method("psdr", given)->derivative(*scene, params, run);
     PsdrOptions o;
     o.interior.spp = 4;
     o.interior.batches = 2;
     o.interior.seed = 11;
     o.interior.path = path_settings(*scene);
     o.primary_spp = o.direct_spp = o.indirect_spp = o.pixel_spp = 2;
-    const PsdrDerivative ref = psdr_derivative(*scene, params, o);
-    expect_same(d.derivative, ref.total);
-    expect_same(d.stderr_img, ref.total_stderr);
+    const DerivativeImage ref = psdr_derivative(*scene, params, o);
+    expect_same(d.derivative, ref.derivative);
+    expect_same(d.stderr_img, ref.stderr_img);
     ASSERT_GE(d.terms.size(), 4u);
     EXPECT_EQ(d.terms[1].name, "primary");
-    expect_same(d.terms[1].value, ref.primary);
+    expect_same(d.terms[1].derivative, ref.term("primary").derivative);
 
     Image adjoint(16, 16);
     for (size_t i = 0; i < adjoint.pixels.size(); ++i)
         adjoint.pixels[i] = Color3f(float(i % 7) - 3.f, 1.f, 0.5f);
     run.batches = 1;
-    const MethodGradient g = make_method("psdr", given)->gradient(*scene, params, adjoint, run);
+    const Gradient g = make_method("psdr", given)->gradient(*scene, params, adjoint, run);
     o.interior.spp = 8;
     o.interior.batches = 1;
     o.primary_spp = o.direct_spp = o.indirect_spp = o.pixel_spp = 4;
@@ -121,12 +121,12 @@ TEST(Method, PsdrCalibratesOncePerConfiguration) {
     auto method = make_method("psdr", MethodOptions());
     MethodRun run;
     run.spp = 16;
-    const MethodDerivative a = method->derivative(*scene, params, run);
+    const DerivativeImage a = method->derivative(*scene, params, run);
     run.seed = 5;
-    const MethodDerivative b = method->derivative(*scene, params, run);
+    const DerivativeImage b = method->derivative(*scene, params, run);
     EXPECT_EQ(a.description, b.description); // same split
     run.seed = 0;
-    const MethodDerivative c = method->derivative(*scene, params, run);
+    const DerivativeImage c = method->derivative(*scene, params, run);
     expect_same(a.derivative, c.derivative); // same seed, same split: the same image
 }
 
@@ -143,7 +143,7 @@ TEST(Method, PathsAdapterIsTheEstimator) {
     Image adjoint(16, 16);
     for (Color3f& c : adjoint.pixels)
         c = Color3f(1.f, -0.5f, 0.25f);
-    const MethodGradient g = make_method("paths", given)->gradient(*scene, params, adjoint, run);
+    const Gradient g = make_method("paths", given)->gradient(*scene, params, adjoint, run);
     PathSamplingOptions o;
     o.spp = 8;
     o.seed = 3;

@@ -61,9 +61,9 @@ TEST_P(MitsubaAdScene, MatchesFiniteDifferences) {
     AdSuiteCase c = load_case(s, s.ci_res);
     const FdSettings ref = fd_settings(suite, s, s.ci_res);
     const FiniteDifference fd = suite_reference(*c.scene, *c.params, ref.eps, ref.spp, 2 + 1000 * seed, 0);
-    const PsdrDerivative d = suite_derivative(*c.scene, *c.params, s.spp, 1 + 1000 * seed, 0);
-    const AdSuiteScore total = score(d.total, d.total_stderr, fd);
-    const AdSuiteScore interior = score(d.interior.derivative, d.interior.stderr_img, fd);
+    const DerivativeImage d = suite_derivative(*c.scene, *c.params, s.spp, 1 + 1000 * seed, 0);
+    const AdSuiteScore total = score(d.derivative, d.stderr_img, fd);
+    const AdSuiteScore interior = score(d.term("interior").derivative, d.term("interior").stderr_img, fd);
     std::printf("  %s at %dx%d, %d spp: %s\n  interior only: %s\n", s.name.c_str(), s.ci_res, s.ci_res, s.spp,
                 describe(total).c_str(), describe(interior).c_str());
 

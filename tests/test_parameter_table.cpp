@@ -145,8 +145,8 @@ Reference value_reference(Scene& scene, ParameterTable& table, const Directions&
 DiffCheck forward_check(Scene& scene, ParameterTable& table, const Directions& directions,
                         const Reference& ref, const char* label) {
     table.select(directions);
-    const PsdrDerivative d = psdr_derivative(scene, table.parameters(), psdr_options(scene, 16));
-    const DiffCheck c = check_against(d.total, d.total_stderr, ref.derivative, ref.error);
+    const DerivativeImage d = psdr_derivative(scene, table.parameters(), psdr_options(scene, 16));
+    const DiffCheck c = check_against(d.derivative, d.stderr_img, ref.derivative, ref.error);
     std::printf("  %s: %s\n", label, describe(c).c_str());
     return c;
 }
@@ -451,7 +451,7 @@ TEST(ParameterTable, ReverseModeChainIsTheAdjointOfForwardMode) {
                           {table.find("cam.rotate"), {-0.2f, 0.1f, 0.3f}}};
     const PsdrOptions o = psdr_options(*s, 1);
     table.select(v);
-    const PsdrDerivative forward = psdr_derivative(*s, table.parameters(), o);
+    const DerivativeImage forward = psdr_derivative(*s, table.parameters(), o);
     std::vector<int> entries;
     for (const auto& [entry, d] : v)
         entries.push_back(entry);
@@ -476,7 +476,7 @@ TEST(ParameterTable, ReverseModeChainIsTheAdjointOfForwardMode) {
         contributions.push_back(contribution);
         direction.insert(direction.end(), v[i].second.begin(), v[i].second.end());
     }
-    const AdjointPair p = adjoint_pair(adjoint, forward.total, flat, direction);
+    const AdjointPair p = adjoint_pair(adjoint, forward.derivative, flat, direction);
     std::printf("  <a, Jv> = %.7g, <J^T a, v> = %.7g (scale %.6g)\n", p.forward, p.reverse, p.scale);
     EXPECT_GT(std::abs(p.forward), 0.05 * p.scale);
     EXPECT_NEAR(p.forward, p.reverse, 1e-4 * p.scale);

@@ -77,16 +77,16 @@ void expect_matches_fd(const std::string& param, double h) {
     auto scene = load_scene_string(quads_scene(32));
     Parameters params(*scene);
     params.enable({parse_param_selection(param)});
-    const PsdrDerivative d = psdr_derivative(*scene, params, batched(*scene, 16, 16));
+    const DerivativeImage d = psdr_derivative(*scene, params, batched(*scene, 16, 16));
     RenderOptions ro;
     ro.spp = 256;
     ro.seed = 99 + seed_offset();
     const FiniteDifference fd = finite_difference(*scene, params, h, ro, 16);
     const Image error =
         with_truncation_error(fd.stderr_img, fd, finite_difference(*scene, params, 2 * h, ro, 16));
-    const DiffCheck total = check_against(d.total, d.total_stderr, fd.derivative, error);
+    const DiffCheck total = check_against(d.derivative, d.stderr_img, fd.derivative, error);
     const DiffCheck interior =
-        check_against(d.interior.derivative, d.interior.stderr_img, fd.derivative, error);
+        check_against(d.term("interior").derivative, d.term("interior").stderr_img, fd.derivative, error);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::printf("  %s: interior+primary %s\n  interior only %s\n  (%.1f s)\n", param.c_str(),
                 describe(total).c_str(), describe(interior).c_str(), seconds);
@@ -203,13 +203,13 @@ TEST(InstanceDerivatives, ReverseModeOfSharedVerticesIsTheAdjoint) {
     o.interior.seed = 5;
     o.interior.path = path_settings(*scene);
     o.primary_spp = 8;
-    const PsdrDerivative forward = psdr_derivative(*scene, params, o);
+    const DerivativeImage forward = psdr_derivative(*scene, params, o);
     Image adjoint(scene->sensor->film->width, scene->sensor->film->height);
     PCG32 rng(3);
     for (auto& a : adjoint.pixels)
         a = Color3f(rng.next_float(), rng.next_float(), rng.next_float());
     const Gradient reverse = psdr_gradient(*scene, params, adjoint, o);
-    const AdjointPair p = adjoint_pair(adjoint, forward.total, reverse.values, params.direction());
+    const AdjointPair p = adjoint_pair(adjoint, forward.derivative, reverse.values, params.direction());
     std::printf("  <a, Jv> = %.6g, <J^T a, v> = %.6g (scale %.6g)\n", p.forward, p.reverse, p.scale);
     EXPECT_GT(std::abs(p.forward), 0.1 * p.scale);
     EXPECT_NEAR(p.forward, p.reverse, 1e-4 * p.scale + 1e-6);

@@ -61,6 +61,15 @@ void check_value(const std::string& method, const MethodOption& o, const std::st
     }
 }
 
+// The NaN policy's report (diff/method.h): the count of dropped samples as a warning.
+template <typename Result> Result reported(Result result) {
+    if (result.cost.dropped > 0)
+        result.warnings.push_back(
+            std::to_string(result.cost.dropped) +
+            " sample(s) with a non-finite value or derivative were left out of the estimate");
+    return result;
+}
+
 } // namespace
 
 int MethodOptions::get_int(const std::string& name, int fallback) const {
@@ -85,8 +94,23 @@ std::string MethodOptions::get_string(const std::string& name, const std::string
     return it == values_.end() ? fallback : it->second;
 }
 
-MethodGradient DerivativeMethod::loss_gradient(const Scene& scene, const Parameters& params,
-                                               const Image& target, LossKind loss, const MethodRun& run) {
+DerivativeImage DerivativeMethod::derivative(const Scene& scene, const Parameters& params,
+                                             const MethodRun& run) {
+    return reported(estimate_derivative(scene, params, run));
+}
+
+Gradient DerivativeMethod::gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                                    const MethodRun& run) {
+    return reported(estimate_gradient(scene, params, adjoint, run));
+}
+
+Gradient DerivativeMethod::loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
+                                         LossKind loss, const MethodRun& run) {
+    return reported(estimate_loss_gradient(scene, params, target, loss, run));
+}
+
+Gradient DerivativeMethod::estimate_loss_gradient(const Scene& scene, const Parameters& params,
+                                                  const Image& target, LossKind loss, const MethodRun& run) {
     const auto start = std::chrono::steady_clock::now();
     // The primal takes its own samples: for a nonlinear loss, E[∂L/∂I(Î)] · E[dÎ/dθ] needs independence.
     RenderOptions ro;
@@ -98,7 +122,7 @@ MethodGradient DerivativeMethod::loss_gradient(const Scene& scene, const Paramet
         throw Error("target image is " + std::to_string(target.width) + "x" + std::to_string(target.height) +
                     ", the film " + std::to_string(primal.width) + "x" + std::to_string(primal.height));
     const LossResult l = compute_loss(loss, primal, target);
-    MethodGradient g = gradient(scene, params, l.adjoint, run);
+    Gradient g = estimate_gradient(scene, params, l.adjoint, run);
     g.loss = l.value;
     g.primal = primal;
     g.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -11,6 +11,7 @@
 #include "core/image.h"
 #include "core/image_loss.h"
 #include "diff/parameters.h"
+#include "diff/result.h"
 
 #include <cstdint>
 #include <functional>
@@ -58,53 +59,30 @@ struct MethodRun {
     std::function<void(float)> progress;
 };
 
-struct MethodTerm {
-    std::string name;
-    Image value, stderr_img; // stderr_img empty with one batch
-};
-
-struct MethodDerivative {
-    Image derivative;
-    Image stderr_img;              // empty with one batch
-    std::vector<MethodTerm> terms; // the method's terms separately (psdr: interior, primary, ...), or empty
-    std::string description; // one line for the log ("interior + boundary terms, image-space first vertex")
-    double seconds = 0;
-    std::vector<std::string> warnings; // what the estimate leaves out, for the user
-    uint64_t dropped_samples = 0;      // non-finite samples left out (the NaN policy; also in `warnings`)
-};
-
-struct MethodGradient {
-    std::vector<double> values; // dL/dθ per enabled parameter scalar
-    Image primal;               // the image the method estimated on the way (may be empty)
-    std::string description;
-    std::vector<std::string> warnings; // what the estimate leaves out, for the user
-    double loss = std::numeric_limits<double>::quiet_NaN(); // loss_gradient: the loss of its primal image
-    double seconds = 0;
-    uint64_t dropped_samples = 0; // non-finite samples left out (the NaN policy; also in `warnings`)
-};
-
 // The NaN policy, one rule for every method: a sample whose value or derivative is not finite is left out of
-// the estimate and counted; a non-zero count is reported with the result (dropped_samples, and a warning that
-// every front shows: the CLI's stderr and JSON, Python's UserWarning, optimize's log).
-template <typename Result> void report_dropped_samples(Result& result, uint64_t dropped) {
-    result.dropped_samples = dropped;
-    if (dropped > 0)
-        result.warnings.push_back(std::to_string(dropped) +
-                                  " sample(s) with a non-finite value or derivative were left out of the estimate");
-}
-
+// the estimate and counted (cost.dropped); the front adds a non-zero count to the result's warnings, which
+// every front shows (the CLI's stderr and JSON, Python's UserWarning, optimize's log).
 class DerivativeMethod {
   public:
     virtual ~DerivativeMethod() = default;
-    // A method object may keep what it calibrated on its first call (psdr: the split of the budget over its
-    // terms) and reuse it while the sensor, its film and the parameter dimension stay the same (an
-    // optimization loop).
-    virtual MethodDerivative derivative(const Scene& scene, const Parameters& params,
-                                        const MethodRun& run) = 0;
-    virtual MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
-                                    const MethodRun& run) = 0;
-    virtual MethodGradient loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
-                                         LossKind loss, const MethodRun& run);
+    DerivativeImage derivative(const Scene& scene, const Parameters& params, const MethodRun& run);
+    Gradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                      const MethodRun& run);
+    Gradient loss_gradient(const Scene& scene, const Parameters& params, const Image& target, LossKind loss,
+                           const MethodRun& run);
+
+  protected:
+    // What a method computes. A method object may keep what it calibrated on its first call (psdr: the split
+    // of the budget over its terms) and reuse it while the sensor, its film and the parameter dimension stay
+    // the same (an optimization loop).
+    virtual DerivativeImage estimate_derivative(const Scene& scene, const Parameters& params,
+                                                const MethodRun& run) = 0;
+    virtual Gradient estimate_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                                       const MethodRun& run) = 0;
+    // By default a primal render with its own samples gives the loss and its adjoint, then
+    // estimate_gradient().
+    virtual Gradient estimate_loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
+                                            LossKind loss, const MethodRun& run);
 };
 
 struct MethodInfo {

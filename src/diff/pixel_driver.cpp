@@ -190,8 +190,14 @@ DerivativeImage pixel_derivative(const PixelLoop& loop) {
         primal.add(s.primal);
         derivative.add(s.derivative);
     }
-    DerivativeImage result{primal.mean(), derivative.mean(), derivative.standard_error(), 0.0, cost.get()};
+    DerivativeImage result;
+    result.derivative = derivative.mean();
+    result.stderr_img = derivative.standard_error();
+    result.primal = primal.mean();
+    result.description = loop.description;
+    result.cost = cost.get();
     result.seconds = seconds_since(loop.start);
+    result.terms.push_back({loop.term, result.derivative, result.stderr_img, result.cost, result.seconds});
     return result;
 }
 
@@ -202,7 +208,10 @@ Gradient pixel_gradient(const PixelLoop& loop, const Image& adjoint) {
     const size_t dim = size_t(loop.params.tape_dimension());
     tbb::enumerable_thread_specific<std::vector<double>> gradients(
         [dim] { return std::vector<double>(dim, 0.0); });
-    Gradient result{std::vector<double>(size_t(loop.params.dimension()), 0.0), {}, Image(film.width, film.height), 0.0, {}};
+    Gradient result;
+    result.values.assign(size_t(loop.params.dimension()), 0.0);
+    result.primal = Image(film.width, film.height);
+    result.description = loop.description;
     if (!loop.unwarped_delta_lights.empty())
         for (const auto& e : loop.scene.emitters)
             if (e->is_delta() && !e->is_infinite()) {

@@ -59,6 +59,8 @@ struct PixelLoop {
     std::function<PixelBoundary(uint64_t seed)> film_edge;
     // The method named by the warning that point and spot lights' shadows do not move (empty: no warning).
     std::string unwarped_delta_lights;
+    // The results' one-line description, and the name of the one term of the derivative.
+    std::string description, term;
     // The results' `seconds` count from the loop's making (the estimator's set-up included).
     std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
 };

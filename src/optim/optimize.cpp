@@ -588,10 +588,10 @@ OptimizeResult run_optimization(const OptimizeConfig& config,
             if (config.loss == LossKind::Matching) {
                 // The method matches its paths to the target and differentiates them in one call.
                 run.seed = view_stream(config.seed, 2 * uint64_t(it) + 2, v);
-                MethodGradient mg;
+                Gradient mg;
                 g = problem.loss_gradient(targets[v], config.loss, *method, run, mg, description);
                 loss_sum += mg.loss;
-                dropped += mg.dropped_samples;
+                dropped += mg.cost.dropped;
                 primal = mg.primal;
             } else {
                 primal = render_image(*scene, config.spp, view_stream(config.seed, 2 * uint64_t(it) + 1, v),

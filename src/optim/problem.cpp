@@ -269,19 +269,19 @@ void InverseProblem::apply() {
 std::vector<double> InverseProblem::gradient(const Image& adjoint, DerivativeMethod& method,
                                              const MethodRun& run, std::string* description,
                                              uint64_t* dropped) const {
-    const MethodGradient g = method.gradient(scene_, *params_, adjoint, run);
-    if (dropped) *dropped = g.dropped_samples;
+    const Gradient g = method.gradient(scene_, *params_, adjoint, run);
+    if (dropped) *dropped = g.cost.dropped;
     return to_tangent(g, description);
 }
 
-std::vector<double> InverseProblem::loss_gradient(const Image& target, LossKind loss, DerivativeMethod& method,
-                                                  const MethodRun& run, MethodGradient& g,
+std::vector<double> InverseProblem::loss_gradient(const Image& target, LossKind loss,
+                                                  DerivativeMethod& method, const MethodRun& run, Gradient& g,
                                                   std::string* description) const {
     g = method.loss_gradient(scene_, *params_, target, loss, run);
     return to_tangent(g, description);
 }
 
-std::vector<double> InverseProblem::to_tangent(const MethodGradient& g, std::string* description) const {
+std::vector<double> InverseProblem::to_tangent(const Gradient& g, std::string* description) const {
     if (description) {
         *description = g.description;
         for (const std::string& w : g.warnings) *description += "; warning: " + w;

@@ -95,11 +95,11 @@ class InverseProblem {
     // The same for a loss the method evaluates itself against the target (the matching loss of dpm-g); `g`
     // receives the method's result (its loss and primal image).
     std::vector<double> loss_gradient(const Image& target, LossKind loss, DerivativeMethod& method,
-                                      const MethodRun& run, MethodGradient& g,
+                                      const MethodRun& run, Gradient& g,
                                       std::string* description = nullptr) const;
 
   private:
-    std::vector<double> to_tangent(const MethodGradient& g, std::string* description) const;
+    std::vector<double> to_tangent(const Gradient& g, std::string* description) const;
 
   public:
     // Errors against true values (the values() layout): ‖x − x*‖ / ‖x*‖ over Data entries; ‖t − t*‖ (scene

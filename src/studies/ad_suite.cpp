@@ -122,8 +122,8 @@ int square_reference_spp(double spp) {
     return AdSuiteReferenceBatches * k * k;
 }
 
-PsdrDerivative suite_derivative(const Scene& scene, const Parameters& params, int spp, uint64_t seed, int threads,
-                                std::function<void(float)> progress) {
+DerivativeImage suite_derivative(const Scene& scene, const Parameters& params, int spp, uint64_t seed,
+                                 int threads, std::function<void(float)> progress) {
     PsdrOptions base;
     base.interior.batches = AdSuiteDerivativeBatches;
     base.interior.seed = seed;

@@ -67,8 +67,8 @@ inline constexpr int AdSuiteDerivativeBatches = 8;
 int square_reference_spp(double spp);
 
 // psdr's derivative given only the total sample count: psdr_budget's split over 8 batches.
-PsdrDerivative suite_derivative(const Scene& scene, const Parameters& params, int spp, uint64_t seed, int threads,
-                                std::function<void(float)> progress = {});
+DerivativeImage suite_derivative(const Scene& scene, const Parameters& params, int spp, uint64_t seed,
+                                 int threads, std::function<void(float)> progress = {});
 
 // Central differences with common random numbers and stratified film samples, `spp` per side split over 16
 // batches.

@@ -50,7 +50,7 @@ std::vector<EqualTimeRow> equal_time_study(const Scene& scene, const Parameters&
         if (options.progress)
             options.progress(spec.text + ": " + std::to_string(options.batches) + " batches");
         const double start = process_cpu_seconds();
-        MethodDerivative d = method->derivative(scene, params, run);
+        DerivativeImage d = method->derivative(scene, params, run);
         const double seconds = process_cpu_seconds() - start;
         EqualTimeRow row;
         row.method = spec.text;

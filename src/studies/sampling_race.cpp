@@ -162,8 +162,9 @@ SamplingRaceResult sampling_race(Scene& scene, const SamplingRaceOptions& o) {
             for (int it = 1; it <= o.iterations; ++it) {
                 // Same seeds for both methods (their sample streams differ anyway: different spp and densities).
                 const double start = process_cpu_seconds();
-                const LossGradient g = path_sampling_loss_gradient(
-                    scene, params, target, o.loss, options_of(m, m.spp, mix_bits(o.seed * 1000003 + uint64_t(it))));
+                const Gradient g = path_sampling_loss_gradient(
+                    scene, params, target, o.loss,
+                    options_of(m, m.spp, mix_bits(o.seed * 1000003 + uint64_t(it))));
                 seconds += process_cpu_seconds() - start;
                 adam.step(x, reduce(g.values));
                 xf.assign(x.begin(), x.end());

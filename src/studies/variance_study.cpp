@@ -194,7 +194,7 @@ VarianceStudy run_variance_study(Scene& scene, Parameters& params, const Varianc
             for (size_t p = 0; p < d.derivative.pixels.size(); ++p)
                 for (int c = 0; c < 3; ++c) a.pixels[3 * p + size_t(c)].add(double(d.derivative.pixels[p][c]));
             a.image_mean.add(film_mean(d.derivative));
-            LossGradient g;
+            Gradient g;
             a.seconds_loss += timed([&] { g = loss_run(v, stats[i].spp_loss, run_seed(o.seed, int(i), 1, r)); });
             a.loss.add(directional(g.values, params.direction()));
         }

@@ -18,6 +18,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 
 namespace penumbra {
 
@@ -44,6 +45,16 @@ std::vector<std::string> settings_warnings(const Scene& scene) {
         w.push_back("dpm: the derivative is the image's at the fixed initial radius, but the sppm integrator's alpha "
                     "< 1 shrinks it (render and fd compute another image); use <float name=\"alpha\" value=\"1\"/>");
     return w;
+}
+
+// "differentiable photon mapping (DPM-C, fixed eye rays), 1 of the pixels, 16 paths each".
+std::string describe(const DpmOptions& o) {
+    char text[160];
+    std::snprintf(text, sizeof(text), "differentiable photon mapping (%s), %g of the pixels, %d path%s each",
+                  o.variant == DpmVariant::C ? "DPM-C, fixed eye rays"
+                                             : "DPM-G, fixed density + vertex merging",
+                  o.pixel_fraction, o.paths, o.paths == 1 ? "" : "s");
+    return text;
 }
 
 void check_options(const Scene& scene, const Parameters& params, const DpmOptions& o) {
@@ -186,7 +197,7 @@ uint64_t dropped_paths(const tbb::enumerable_thread_specific<ReverseSweep>& swee
 
 } // namespace
 
-DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const DpmOptions& o) {
+DerivativeImage dpm_derivative(const Scene& scene, const Parameters& params, const DpmOptions& o) {
     const auto start = std::chrono::steady_clock::now();
     check_options(scene, params, o);
     const Film& film = *scene.sensor->film;
@@ -229,20 +240,21 @@ DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const
             y_batches.add(motion_y);
         }
     }
-    DpmDerivative out;
-    out.image.primal = primal_batches.mean();
-    out.image.derivative = derivative_batches.mean();
-    out.image.stderr_img = derivative_batches.standard_error();
-    if (screen) {
-        out.screen_x = x_batches.mean();
-        out.screen_y = y_batches.mean();
-        out.screen_x_stderr = x_batches.standard_error();
-        out.screen_y_stderr = y_batches.standard_error();
-    }
+    DerivativeImage out;
+    out.derivative = derivative_batches.mean();
+    out.stderr_img = derivative_batches.standard_error();
+    out.primal = primal_batches.mean();
     out.mean_stderr = derivative_batches.mean_standard_error();
-    out.image.cost.dropped = dropped.load();
+    out.description = describe(o);
     out.warnings = settings_warnings(scene);
-    out.image.seconds = seconds_since(start);
+    out.cost.dropped = dropped.load();
+    out.seconds = seconds_since(start);
+    out.terms.push_back({o.variant == DpmVariant::C ? "photon-mapping" : "contribution", out.derivative,
+                         out.stderr_img, out.cost, out.seconds});
+    if (screen) {
+        out.terms.push_back({"screen_x", x_batches.mean(), x_batches.standard_error(), {}, 0.0});
+        out.terms.push_back({"screen_y", y_batches.mean(), y_batches.standard_error(), {}, 0.0});
+    }
     return out;
 }
 
@@ -253,7 +265,8 @@ Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image&
     check_adjoint_size(film, adjoint);
     const size_t dim = size_t(params.tape_dimension());
     tbb::enumerable_thread_specific<ReverseSweep> sweeps([dim] { return ReverseSweep(dim); });
-    Gradient out{{}, {}, Image(film.width, film.height), 0.0, {}};
+    Gradient out;
+    out.primal = Image(film.width, film.height);
     const float inv = 1.f / float(o.spp);
     for_each_path(
         scene, params, o, 0, uint64_t(o.spp), o.progress,
@@ -266,13 +279,14 @@ Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image&
         });
     out.values = total(params, sweeps);
     out.cost.dropped = dropped_paths(sweeps);
+    out.description = describe(o);
     out.warnings = settings_warnings(scene);
     out.seconds = seconds_since(start);
     return out;
 }
 
-DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, const Image& target,
-                                  const DpmOptions& o) {
+Gradient dpm_matching_gradient(const Scene& scene, const Parameters& params, const Image& target,
+                               const DpmOptions& o) {
     const auto start = std::chrono::steady_clock::now();
     check_options(scene, params, o);
     const Film& film = *scene.sensor->film;
@@ -312,11 +326,14 @@ DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, 
                            {s.film.y.id, float(loss.d_position(i, 1)) / (float(film.height) * shares)}};
             sweep.run();
         });
-    DpmMatching out;
+    Gradient out;
+    out.values = total(params, sweeps);
+    out.primal = primal;
+    out.description = describe(o) + ", matching loss";
+    out.warnings = settings_warnings(scene);
     out.loss = loss.value;
-    out.gradient = Gradient{total(params, sweeps), settings_warnings(scene), primal, 0.0, {}};
-    out.gradient.cost.dropped = dropped_paths(sweeps);
-    out.gradient.seconds = seconds_since(start);
+    out.cost.dropped = dropped_paths(sweeps);
+    out.seconds = seconds_since(start);
     return out;
 }
 

@@ -41,39 +41,27 @@ struct DpmOptions {
     std::function<void(float)> progress;
 };
 
-struct DpmDerivative {
-    // DPM-C: dI/dθ along params.direction() (the primal: SPPM at the fixed radius, same samples). DPM-G: the
-    // contribution derivatives, each at the pixel its path was sampled in.
-    DerivativeImage image;
-    // DPM-G: the screen-space motion of the paths' contributions, Σ I dp/dθ per pixel (p in pixels, Eq. 7),
-    // with standard errors; with `image`, d/dθ of any statistic of where the light lands (e.g. a caustic's
-    // centroid). Empty for DPM-C, whose eye rays do not move.
-    Image screen_x, screen_y, screen_x_stderr, screen_y_stderr;
-    // The standard error of the derivative image's mean from the spread of the batches' means: photons are
-    // shared by neighbouring pixels, so pixel errors are correlated and sqrt(Σσ²)/N underestimates it (by up
-    // to 2× on the validation scenes, docs/dpm-validation.md).
-    double mean_stderr = 0;
-    std::vector<std::string> warnings; // the scene's sppm settings the estimate does not follow
-};
-
-// Forward mode along params.direction().
-DpmDerivative dpm_derivative(const Scene& scene, const Parameters& params, const DpmOptions& options);
+// Forward mode along params.direction(), with the primal (SPPM at the fixed radius, same samples). DPM-C:
+// dI/dθ, one term "photon-mapping". DPM-G: the contribution derivatives, each at the pixel its path was
+// sampled in (term "contribution"), and the terms "screen_x" and "screen_y": the screen-space motion of the
+// paths' contributions, Σ I dp/dθ per pixel (p in pixels, Eq. 7), with standard errors; with the
+// contribution, d/dθ of any statistic of where the light lands (e.g. a caustic's centroid). DPM-C's eye rays
+// do not move. The standard error of the image's mean comes from the spread of the batches' means
+// (mean_stderr): photons are shared by neighbouring pixels, so pixel errors are correlated and sqrt(Σσ²)/N
+// underestimates it (by up to 2× on the validation scenes, docs/dpm-validation.md). Warnings: the scene's
+// sppm settings the estimate does not follow.
+DerivativeImage dpm_derivative(const Scene& scene, const Parameters& params, const DpmOptions& options);
 // Reverse mode: dL/dθ = Σ_pixels ∂L/∂I · dI/dθ for every enabled parameter (DPM-G: contribution derivatives).
 Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
                       const DpmOptions& options);
 
-struct DpmMatching {
-    Gradient gradient;
-    double loss = 0; // Eq. 25 averaged over the pixels
-};
-
-// The matching loss of §5.3 (Eq. 25, diff/dpm/matching_loss.h): the estimator's SPPM image is matched pixel to
-// pixel to the target by entropic optimal transport on RGB + xy (Xing et al. 2022, 2023), and each pixel is
-// pulled toward its match's position and colour; dL/dθ chains ∂L/∂p and ∂L/∂I with the screen-space motion
+// The matching loss of §5.3 (Eq. 25, diff/dpm/matching_loss.h): the estimator's SPPM image is matched pixel
+// to pixel to the target by entropic optimal transport on RGB + xy (Xing et al. 2022, 2023), and each pixel
+// is pulled toward its match's position and colour; dL/dθ chains ∂L/∂p and ∂L/∂I with the screen-space motion
 // and the contribution derivatives of the paths sampled in the pixel (DPM-G: averaged over its two EPSMs;
 // DPM-C: contribution only). The passes are traced twice with the same random numbers: once for the image
-// to match, once to differentiate.
-DpmMatching dpm_matching_gradient(const Scene& scene, const Parameters& params, const Image& target,
-                                  const DpmOptions& options);
+// to match, once to differentiate. The gradient's loss is Eq. 25 averaged over the pixels.
+Gradient dpm_matching_gradient(const Scene& scene, const Parameters& params, const Image& target,
+                               const DpmOptions& options);
 
 } // namespace penumbra

@@ -3,8 +3,6 @@
 #include "diff/dpm/dpm.h"
 #include "diff/method_adapter.h"
 
-#include <cstdio>
-
 namespace penumbra {
 
 namespace {
@@ -17,37 +15,24 @@ class DpmMethod final : public DerivativeMethod {
         base_.paths = o.get_int("paths", base_.paths);
         base_.matching.scaling = o.get_float("matching-scaling", base_.matching.scaling);
         base_.matching.max_iterations = o.get_int("matching-iterations", base_.matching.max_iterations);
-        char text[160];
-        std::snprintf(text, sizeof(text), "differentiable photon mapping (%s), %g of the pixels, %d path%s each",
-                      variant == DpmVariant::C ? "DPM-C, fixed eye rays" : "DPM-G, fixed density + vertex merging",
-                      base_.pixel_fraction, base_.paths, base_.paths == 1 ? "" : "s");
-        name_ = text;
     }
 
-    MethodDerivative derivative(const Scene& scene, const Parameters& params, const MethodRun& run) override {
-        const DpmDerivative d = dpm_derivative(scene, params, options(run, run.batches));
-        MethodDerivative out = one_term_derivative(
-            d.image, base_.variant == DpmVariant::C ? "photon-mapping" : "contribution", name_);
-        out.warnings.insert(out.warnings.begin(), d.warnings.begin(), d.warnings.end());
-        if (base_.variant == DpmVariant::G) {
-            out.terms.push_back({"screen_x", d.screen_x, d.screen_x_stderr});
-            out.terms.push_back({"screen_y", d.screen_y, d.screen_y_stderr});
-        }
-        return out;
+  protected:
+    DerivativeImage estimate_derivative(const Scene& scene, const Parameters& params,
+                                        const MethodRun& run) override {
+        return dpm_derivative(scene, params, options(run, run.batches));
     }
 
-    MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
-                            const MethodRun& run) override {
-        return method_gradient(dpm_gradient(scene, params, adjoint, options(run, 1)), name_);
+    Gradient estimate_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                               const MethodRun& run) override {
+        return dpm_gradient(scene, params, adjoint, options(run, 1));
     }
 
-    MethodGradient loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
-                                 LossKind loss, const MethodRun& run) override {
-        if (loss != LossKind::Matching) return DerivativeMethod::loss_gradient(scene, params, target, loss, run);
-        const DpmMatching m = dpm_matching_gradient(scene, params, target, options(run, 1));
-        MethodGradient out = method_gradient(m.gradient, name_ + ", matching loss");
-        out.loss = m.loss;
-        return out;
+    Gradient estimate_loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
+                                    LossKind loss, const MethodRun& run) override {
+        if (loss != LossKind::Matching)
+            return DerivativeMethod::estimate_loss_gradient(scene, params, target, loss, run);
+        return dpm_matching_gradient(scene, params, target, options(run, 1));
     }
 
   private:
@@ -62,7 +47,6 @@ class DpmMethod final : public DerivativeMethod {
     }
 
     DpmOptions base_;
-    std::string name_;
 };
 
 std::vector<MethodOption> dpm_options() {

@@ -138,18 +138,19 @@ void check_size(const Scene& scene, const Image& image, const char* what) {
                     ", the film " + std::to_string(film.width) + "x" + std::to_string(film.height));
 }
 
-// Mean and standard error over batches of a gradient vector.
-void batch_statistics(const std::vector<std::vector<double>>& batches, std::vector<double>& mean, std::vector<double>& se) {
+// The mean over batches of a gradient vector.
+std::vector<double> batch_mean(const std::vector<std::vector<double>>& batches) {
     const size_t B = batches.size(), dim = batches.front().size();
-    mean.assign(dim, 0.0);
+    std::vector<double> mean(dim, 0.0);
     for (const auto& g : batches)
         for (size_t k = 0; k < dim; ++k) mean[k] += g[k] / double(B);
-    se.clear();
-    if (B < 2) return;
-    se.assign(dim, 0.0);
-    for (const auto& g : batches)
-        for (size_t k = 0; k < dim; ++k) se[k] += (g[k] - mean[k]) * (g[k] - mean[k]);
-    for (size_t k = 0; k < dim; ++k) se[k] = std::sqrt(se[k] / double(B - 1) / double(B));
+    return mean;
+}
+
+// "differential sampling + NEE + adaptive pixels".
+std::string describe(const PathSamplingOptions& o) {
+    return std::string(o.differential ? "differential" : "bsdf") + " sampling" + (o.nee ? " + NEE" : "") +
+           (o.adaptive ? " + adaptive pixels" : "");
 }
 
 } // namespace
@@ -182,11 +183,18 @@ DerivativeImage path_sampling_derivative(const Scene& scene, const Parameters& p
         derivative.add(r.derivative);
         cost.dropped += r.dropped;
     }
-    return {primal.mean(), derivative.mean(), derivative.standard_error(), seconds_since(start), cost};
+    DerivativeImage d;
+    d.derivative = derivative.mean();
+    d.stderr_img = derivative.standard_error();
+    d.primal = primal.mean();
+    d.description = "path sampling: " + describe(o);
+    d.seconds = seconds_since(start);
+    d.cost = cost;
+    return d;
 }
 
-SampledGradient path_sampling_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
-                                       const PathSamplingOptions& o) {
+Gradient path_sampling_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                                const PathSamplingOptions& o) {
     check_path_sampling(scene, params, o);
     check_size(scene, adjoint, "the adjoint image");
     const Film& film = *scene.sensor->film;
@@ -194,23 +202,24 @@ SampledGradient path_sampling_gradient(const Scene& scene, const Parameters& par
     const PixelBudget budget = o.adaptive ? adaptive_budget(adjoint, o.spp, o.defensive) : uniform_budget(film.width, film.height, o.spp);
     std::vector<std::vector<double>> gradients;
     ImageBatches primal;
-    SampledGradient g;
+    Gradient g;
     for (int b = 0; b < o.batches; ++b) {
         PassResult r = run_pass(scene, params, settings_of(o), budget, batch_seed(o.seed, b), o.threads, Mode::Reverse,
                                 &adjoint, batch_progress(o, b));
         gradients.push_back(std::move(r.gradient));
         primal.add(r.primal);
-        g.dropped += r.dropped;
+        g.cost.dropped += r.dropped;
     }
-    batch_statistics(gradients, g.values, g.standard_error);
+    g.values = batch_mean(gradients);
     g.batch_values = std::move(gradients);
     g.primal = primal.mean();
+    g.description = "paths: " + describe(o);
     g.seconds = seconds_since(start);
     return g;
 }
 
-LossGradient path_sampling_loss_gradient(const Scene& scene, const Parameters& params, const Image& target, LossKind loss,
-                                         const PathSamplingOptions& o) {
+Gradient path_sampling_loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
+                                     LossKind loss, const PathSamplingOptions& o) {
     check_path_sampling(scene, params, o);
     check_size(scene, target, "the target image");
     if (!(o.primal_fraction > 0.0 && o.primal_fraction < 1.0))
@@ -221,31 +230,29 @@ LossGradient path_sampling_loss_gradient(const Scene& scene, const Parameters& p
         throw Error("path sampling: --spp " + std::to_string(o.spp) + " leaves no sample for the gradient passes after " +
                     std::to_string(spp_primal) + " primal samples per pixel");
     const Film& film = *scene.sensor->film;
-    LossGradient out;
+    const auto start = std::chrono::steady_clock::now();
+    Gradient out;
+    out.loss = 0;
     std::vector<std::vector<double>> gradients;
     for (int b = 0; b < o.batches; ++b) {
         const uint64_t seed = batch_seed(o.seed, b);
         // Pass 1: its own random numbers, so that ∂L/∂I is independent of passes 2-3 (unbiased for losses
         // whose adjoint is affine in I, such as L2).
-        auto start = std::chrono::steady_clock::now();
         const PassResult first = run_pass(scene, params, settings_of(o), uniform_budget(film.width, film.height, spp_primal),
                                           seed ^ 0x5DEECE66DULL, o.threads, Mode::Primal, nullptr, nullptr);
-        LossResult l = compute_loss(loss, first.primal, target);
-        out.seconds_primal += seconds_since(start);
-        start = std::chrono::steady_clock::now();
+        const LossResult l = compute_loss(loss, first.primal, target);
         const PixelBudget budget = o.adaptive ? adaptive_budget(l.adjoint, spp_gradient, o.defensive)
                                               : uniform_budget(film.width, film.height, spp_gradient);
-        PassResult r = run_pass(scene, params, settings_of(o), budget, seed, o.threads, Mode::Reverse, &l.adjoint,
-                                batch_progress(o, b));
-        out.seconds_gradient += seconds_since(start);
+        PassResult r = run_pass(scene, params, settings_of(o), budget, seed, o.threads, Mode::Reverse,
+                                &l.adjoint, batch_progress(o, b));
         gradients.push_back(std::move(r.gradient));
         out.loss += l.value / double(o.batches);
         out.primal = first.primal;
-        out.adjoint = std::move(l.adjoint);
     }
-    batch_statistics(gradients, out.values, out.standard_error);
+    out.values = batch_mean(gradients);
     out.batch_values = std::move(gradients);
-    out.seconds = out.seconds_primal + out.seconds_gradient;
+    out.description = "paths: " + describe(o);
+    out.seconds = seconds_since(start);
     return out;
 }
 

@@ -45,32 +45,18 @@ struct PathSamplingOptions {
     std::function<void(float)> progress;
 };
 
-struct SampledGradient {
-    std::vector<double> values;          // dL/dθ per enabled parameter scalar (mean over batches)
-    std::vector<double> standard_error;  // per scalar, from the batches (empty with one batch)
-    std::vector<std::vector<double>> batch_values; // each batch's estimate (for statistics of combinations)
-    Image primal;                        // pass 2's image (with adaptive pixels: the same 1 / c_j weighting)
-    double seconds = 0;
-    uint64_t dropped = 0;                // paths with a non-finite value or derivative, left out (NaN policy)
-};
-
-struct LossGradient {
-    double loss = 0;                     // loss of pass 1's image (mean over batches)
-    std::vector<double> values, standard_error;
-    std::vector<std::vector<double>> batch_values;
-    Image primal, adjoint;               // pass 1's image and ∂L/∂I of the last batch
-    double seconds = 0, seconds_primal = 0, seconds_gradient = 0;
-};
-
 // Throws Error unless every enabled parameter is a non-geometric value and the options are valid.
 void check_path_sampling(const Scene& scene, const Parameters& params, const PathSamplingOptions& options);
 
 // `adjoint` is only read with options.adaptive (pixel counts ∝ |adjoint|, the paper's importance).
 DerivativeImage path_sampling_derivative(const Scene& scene, const Parameters& params, const PathSamplingOptions& options,
                                          const Image& adjoint = Image());
-SampledGradient path_sampling_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
-                                       const PathSamplingOptions& options);
-LossGradient path_sampling_loss_gradient(const Scene& scene, const Parameters& params, const Image& target, LossKind loss,
-                                         const PathSamplingOptions& options);
+// Values are the means over the batches (each batch's in batch_values), the primal pass 2's image (with
+// adaptive pixels: the same 1 / c_j weighting).
+Gradient path_sampling_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                                const PathSamplingOptions& options);
+// The loss is the mean of pass 1's over the batches, the primal pass 1's image of the last batch.
+Gradient path_sampling_loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
+                                     LossKind loss, const PathSamplingOptions& options);
 
 } // namespace penumbra

@@ -16,40 +16,30 @@ class PathsMethod final : public DerivativeMethod {
         base_.adaptive = o.get_bool("adaptive", false);
         base_.defensive = o.get_float("defensive", 0.05);
         base_.primal_fraction = o.get_float("primal-fraction", 0.75);
-        name_ = std::string(base_.differential ? "differential" : "bsdf") + " sampling" +
-                (base_.nee ? " + NEE" : "") + (base_.adaptive ? " + adaptive pixels" : "");
     }
 
-    MethodDerivative derivative(const Scene& scene, const Parameters& params, const MethodRun& run) override {
+  protected:
+    DerivativeImage estimate_derivative(const Scene& scene, const Parameters& params,
+                                        const MethodRun& run) override {
         if (base_.adaptive && !run.importance)
             throw Error("method paths: adaptive needs a pixel importance (--adjoint: the image |∂L/∂I|)");
-        const DerivativeImage d =
-            path_sampling_derivative(scene, params, run_options(base_, scene, run, run.batches),
-                                     run.importance ? *run.importance : Image());
-        MethodDerivative out{d.derivative, d.stderr_img, {}, "path sampling: " + name_, d.seconds, {}};
-        report_dropped_samples(out, d.cost.dropped);
-        return out;
+        return path_sampling_derivative(scene, params, run_options(base_, scene, run, run.batches),
+                                        run.importance ? *run.importance : Image());
     }
 
-    MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
-                            const MethodRun& run) override {
-        const PathSamplingOptions o = run_options(base_, scene, run, 1);
-        return method_gradient(path_sampling_gradient(scene, params, adjoint, o), "paths: " + name_);
+    Gradient estimate_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                               const MethodRun& run) override {
+        return path_sampling_gradient(scene, params, adjoint, run_options(base_, scene, run, 1));
     }
 
     // PRB's three passes (paper 002 Algorithm 1): pass 1 gets primal-fraction of the samples.
-    MethodGradient loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
-                                 LossKind loss, const MethodRun& run) override {
-        const LossGradient l =
-            path_sampling_loss_gradient(scene, params, target, loss, run_options(base_, scene, run, 1));
-        MethodGradient out = method_gradient(l, "paths: " + name_);
-        out.loss = l.loss;
-        return out;
+    Gradient estimate_loss_gradient(const Scene& scene, const Parameters& params, const Image& target,
+                                    LossKind loss, const MethodRun& run) override {
+        return path_sampling_loss_gradient(scene, params, target, loss, run_options(base_, scene, run, 1));
     }
 
   private:
     PathSamplingOptions base_;
-    std::string name_;
 };
 
 } // namespace

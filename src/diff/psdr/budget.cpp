@@ -37,6 +37,7 @@ PsdrOptions allocate(const PsdrOptions& base, const std::array<TermStats, Terms>
     for (const TermStats& t : stats)
         if (t.active) budget += spp * t.cost, norm += std::sqrt(t.variance * t.cost);
     PsdrOptions o = base;
+    o.calibrated = true;
     const int minimum = std::max(1, pilot_spp(spp) * PilotBatches / batches);
     for (int k = 0; k < Terms; ++k) {
         const TermStats& t = stats[size_t(k)];
@@ -71,13 +72,12 @@ using Stats = std::array<TermStats, Terms>;
 Stats derivative_stats(const Scene& scene, const Parameters& params, const PsdrOptions& base, int spp) {
     PsdrOptions pilot = pilot_options(base, spp);
     pilot.interior.batches = PilotBatches;
-    const PsdrDerivative d = psdr_derivative(scene, params, pilot);
-    const auto terms = d.terms();
+    const DerivativeImage d = psdr_derivative(scene, params, pilot);
     const int samples = pilot_spp(spp) * PilotBatches;
-    Stats stats;
-    for (int k = 0; k < Terms; ++k) {
-        const SampleCost& c = d.cost[size_t(k)];
-        stats[size_t(k)] = {per_sample_variance(*terms[size_t(k)].second, samples), c.units() / samples, c.rays > 0};
+    Stats stats; // a term that does not apply (pixel) keeps zero statistics: inactive
+    for (size_t k = 0; k < d.terms.size(); ++k) {
+        const DerivativeTerm& t = d.terms[k];
+        stats[k] = {per_sample_variance(t.stderr_img, samples), t.cost.units() / samples, t.cost.rays > 0};
     }
     return stats;
 }

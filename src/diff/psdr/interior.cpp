@@ -104,6 +104,15 @@ void set_interior_samples(PixelLoop& loop, std::shared_ptr<const MaterialForm> f
     });
 }
 
+// The results' term name and description ("interior term (unidirectional), image-space first vertex").
+void describe_interior(PixelLoop& loop, const DiffOptions& options) {
+    const bool bidirectional = bidirectional_interior(loop.scene, options.estimator);
+    const bool image_space = image_space_first_vertex(loop.scene, loop.params, options.first_vertex);
+    loop.term = "interior";
+    loop.description = std::string("interior term (") + (bidirectional ? "bidirectional" : "unidirectional") +
+                       "), " + (image_space ? "image-space" : "material-form") + " first vertex";
+}
+
 } // namespace
 
 DerivativeImage render_derivative(const Scene& scene, const Parameters& params, const DiffOptions& options) {
@@ -112,6 +121,7 @@ DerivativeImage render_derivative(const Scene& scene, const Parameters& params, 
     PixelLoop loop(scene, params, options);
     set_interior_samples(loop, std::make_shared<const MaterialForm>(scene, params, options.first_vertex),
                          options);
+    describe_interior(loop, options);
     return pixel_derivative(loop);
 }
 
@@ -121,6 +131,7 @@ Gradient render_gradient(const Scene& scene, const Parameters& params, const Ima
     const auto form = std::make_shared<const MaterialForm>(scene, params, options.first_vertex);
     if (bidirectional_interior(scene, options.estimator)) require_bidirectional_support(scene);
     set_interior_samples(loop, form, options);
+    describe_interior(loop, options);
     Gradient result = pixel_gradient(loop, adjoint);
     for (const std::string& shape : form->volume_motion().omitted())
         result.warnings.push_back("the medium around '" + shape + "' does not follow its vertex_positions (" +

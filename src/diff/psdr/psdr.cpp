@@ -1,6 +1,7 @@
 #include "diff/psdr/psdr.h"
 
 #include "core/batch_stats.h"
+#include "diff/psdr/budget.h"
 
 #include <array>
 #include <chrono>
@@ -60,7 +61,7 @@ public:
                   {indirect_, options.indirect_spp, 0xC2B2AE3D27D4EB4FULL},
                   {pixel_, options.pixel_spp, 0x165667B19E3779F9ULL}}} {}
 
-    // In the order of PsdrDerivative's images: primary, direct, indirect, pixel.
+    // In the order of the derivative's terms after the interior: primary, direct, indirect, pixel.
     const std::array<Term, 4>& terms() const { return terms_; }
 
 private:
@@ -72,50 +73,64 @@ private:
     std::array<Term, 4> terms_;
 };
 
+// "interior + boundary terms (interior 12, primary 1500, ... spp, image-space first vertex, calibrated)".
+std::string describe(const PsdrOptions& options) {
+    return "interior + boundary terms (" + describe_budget(options) +
+           (options.calibrated ? ", calibrated)" : ")");
+}
+
 } // namespace
 
-PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, const PsdrOptions& options) {
+DerivativeImage psdr_derivative(const Scene& scene, const Parameters& params, const PsdrOptions& options) {
+    const auto start = std::chrono::steady_clock::now();
     require_pinhole_terms(scene, params, options);
-    PsdrDerivative out;
+    DerivativeImage out;
+    std::array<DerivativeTerm, PsdrTermNames.size()> terms;
     const Film& film = *scene.sensor->film;
     if (options.interior.spp > 0) {
-        out.interior = render_derivative(scene, params, options.interior);
+        DerivativeImage interior = render_derivative(scene, params, options.interior);
+        terms[0] = std::move(interior.terms.front());
+        out.primal = std::move(interior.primal);
+        out.warnings = std::move(interior.warnings);
     } else {
-        out.interior.derivative = Image(film.width, film.height);
-        if (options.interior.batches > 1) out.interior.stderr_img = Image(film.width, film.height);
+        terms[0].derivative = Image(film.width, film.height);
+        if (options.interior.batches > 1) terms[0].stderr_img = Image(film.width, film.height);
     }
-    out.cost[0] = out.interior.cost;
-    out.seconds[0] = out.interior.seconds;
     const BoundaryTerms boundary(scene, options);
-    const std::array<std::pair<Image*, Image*>, 4> images = {{{&out.primary, &out.primary_stderr},
-                                                              {&out.direct, &out.direct_stderr},
-                                                              {&out.indirect, &out.indirect_stderr},
-                                                              {&out.pixel, &out.pixel_stderr}}};
-    for (size_t k = 0; k < images.size(); ++k) {
-        const BoundaryTerms::Term& t = boundary.terms()[k];
-        const auto start = std::chrono::steady_clock::now();
-        boundary_batches(scene, params, options, t.estimator, t.spp, t.salt, *images[k].first, *images[k].second,
-                         out.cost[k + 1]);
-        out.seconds[k + 1] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    for (size_t k = 1; k < terms.size(); ++k) {
+        const BoundaryTerms::Term& t = boundary.terms()[k - 1];
+        const auto term_start = std::chrono::steady_clock::now();
+        boundary_batches(scene, params, options, t.estimator, t.spp, t.salt, terms[k].derivative,
+                         terms[k].stderr_img, terms[k].cost);
+        terms[k].seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - term_start).count();
     }
-    out.total = out.interior.derivative;
+    out.derivative = terms[0].derivative;
     const bool have_se = options.interior.batches > 1;
-    if (have_se) out.total_stderr = Image(film.width, film.height);
-    for (size_t i = 0; i < out.total.pixels.size(); ++i) {
-        const Vec3d s(out.interior.stderr_img.pixels.empty() ? Color3f(0.f) : out.interior.stderr_img.pixels[i]);
+    if (have_se) out.stderr_img = Image(film.width, film.height);
+    for (size_t i = 0; i < out.derivative.pixels.size(); ++i) {
+        const Vec3d s(terms[0].stderr_img.pixels.empty() ? Color3f(0.f) : terms[0].stderr_img.pixels[i]);
         Vec3d variance = s * s;
-        for (const auto& [mean, stderr_img] : images) {
-            out.total.pixels[i] += mean->pixels[i];
+        for (size_t k = 1; k < terms.size(); ++k) {
+            out.derivative.pixels[i] += terms[k].derivative.pixels[i];
             if (have_se) {
                 // The estimators use independent samples: variances add.
-                const Vec3d e(stderr_img->pixels[i]);
+                const Vec3d e(terms[k].stderr_img.pixels[i]);
                 variance += e * e;
             }
         }
         if (have_se)
-            out.total_stderr.pixels[i] =
-                Color3f(float(std::sqrt(variance.x)), float(std::sqrt(variance.y)), float(std::sqrt(variance.z)));
+            out.stderr_img.pixels[i] = Color3f(float(std::sqrt(variance.x)), float(std::sqrt(variance.y)),
+                                               float(std::sqrt(variance.z)));
     }
+    const bool pixel_term = needs_pixel_boundary(scene, params, options.interior.first_vertex);
+    for (size_t k = 0; k < terms.size(); ++k) {
+        out.cost += terms[k].cost;
+        terms[k].name = PsdrTermNames[k];
+        if (k + 1 < terms.size() || pixel_term) out.terms.push_back(std::move(terms[k]));
+    }
+    out.description = describe(options);
+    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return out;
 }
 
@@ -139,6 +154,7 @@ Gradient psdr_gradient(const Scene& scene, const Parameters& params, const Image
         bo.seed = options.interior.seed + t.salt;
         t.estimator.gradient(params, adjoint, bo, g.values);
     }
+    g.description = describe(options);
     g.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return g;
 }

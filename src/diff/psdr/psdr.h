@@ -12,7 +12,6 @@
 #include "diff/psdr/primary_boundary.h"
 
 #include <array>
-#include <utility>
 
 namespace penumbra {
 
@@ -25,35 +24,16 @@ struct PsdrOptions {
     bool guiding = true;      // contrast-guided sampling of the primary term's edges (always mixed with uniform)
     bool volume_boundary = true; // boundary segments may end at medium vertices (false: surface endpoints only,
                                  // the DTRT-like baseline that misses shadow sheets in media)
+    bool calibrated = false;  // the split came from psdr_budget (diff/psdr/budget.h); the description says so
 };
 
-struct PsdrDerivative {
-    DerivativeImage interior;  // interior term (with its primal and standard errors)
-    Image primary;             // primary boundary term
-    Image primary_stderr;      // its per-pixel standard error (empty with one batch)
-    Image direct;              // direct boundary term
-    Image direct_stderr;
-    Image indirect;            // indirect boundary term
-    Image indirect_stderr;
-    Image pixel;               // pixel-boundary term (zero unless the film has a box or cut filter)
-    Image pixel_stderr;
-    Image total;               // interior + boundary
-    Image total_stderr;        // combined standard error (the estimators are independent)
-    // What each term cost, in the order interior, primary, direct, indirect, pixel.
-    std::array<SampleCost, 5> cost;
-    std::array<double, 5> seconds{};
-
-    // Each term's image and standard error, in that order.
-    std::array<std::pair<const Image*, const Image*>, 5> terms() const {
-        return {{{&interior.derivative, &interior.stderr_img}, {&primary, &primary_stderr}, {&direct, &direct_stderr},
-                 {&indirect, &indirect_stderr}, {&pixel, &pixel_stderr}}};
-    }
-};
-
-// The terms' names in that order.
+// The terms' names, in the order of the derivative's terms.
 inline constexpr std::array<const char*, 5> PsdrTermNames = {"interior", "primary", "direct", "indirect", "pixel"};
 
-PsdrDerivative psdr_derivative(const Scene& scene, const Parameters& params, const PsdrOptions& options);
+// The total (interior + boundary) with each term's image, standard error and cost in the order of
+// PsdrTermNames; the pixel term only where it applies (needs_pixel_boundary). Standard errors combine the
+// terms' (independent).
+DerivativeImage psdr_derivative(const Scene& scene, const Parameters& params, const PsdrOptions& options);
 Gradient psdr_gradient(const Scene& scene, const Parameters& params, const Image& adjoint, const PsdrOptions& options);
 
 } // namespace penumbra

@@ -1,6 +1,7 @@
 // The methods `psdr` (the total derivative of paper 001 Eq. 19: interior + boundary terms, diff/psdr/psdr.h, with
 // the budget split by diff/psdr/budget.h) and `interior` (the material-form interior term alone) behind the common
 // front of diff/method.h.
+#include "core/seconds.h"
 #include "diff/method_adapter.h"
 #include "diff/psdr/budget.h"
 #include "diff/psdr/psdr.h"
@@ -50,37 +51,28 @@ class PsdrMethod final : public DerivativeMethod {
         }
     }
 
-    MethodDerivative derivative(const Scene& scene, const Parameters& params, const MethodRun& run) override {
+  protected:
+    DerivativeImage estimate_derivative(const Scene& scene, const Parameters& params,
+                                        const MethodRun& run) override {
         const auto start = std::chrono::steady_clock::now();
         PsdrOptions o = options(scene, params, run, nullptr);
         o.interior.progress = run.progress;
-        const PsdrDerivative d = psdr_derivative(scene, params, o);
-        MethodDerivative out;
-        out.derivative = boundary_ ? d.total : d.interior.derivative;
-        out.stderr_img = boundary_ ? d.total_stderr : d.interior.stderr_img;
-        const auto terms = d.terms();
-        for (size_t k = 0; k < (boundary_ ? terms.size() : 1); ++k) {
-            if (k == 4 && !needs_pixel_boundary(scene, params, o.interior.first_vertex)) continue;
-            out.terms.push_back({PsdrTermNames[k], *terms[k].first, *terms[k].second});
-        }
-        if (boundary_ && run.verbose) print_costs(d);
-        out.description = describe(scene, params, o);
-        out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        uint64_t dropped = 0;
-        for (const SampleCost& c : d.cost) dropped += c.dropped;
-        report_dropped_samples(out, dropped);
-        return out;
+        if (!boundary_) return render_derivative(scene, params, o.interior);
+        DerivativeImage d = psdr_derivative(scene, params, o);
+        if (run.verbose) print_costs(d);
+        d.seconds = seconds_since(start); // with the calibration
+        return d;
     }
 
-    MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
-                            const MethodRun& run) override {
+    Gradient estimate_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                               const MethodRun& run) override {
         const auto start = std::chrono::steady_clock::now();
         PsdrOptions o = options(scene, params, run, &adjoint);
         o.interior.progress = run.progress;
-        MethodGradient out =
-            method_gradient(psdr_gradient(scene, params, adjoint, o), describe(scene, params, o));
-        out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        return out;
+        if (!boundary_) return render_gradient(scene, params, adjoint, o.interior);
+        Gradient g = psdr_gradient(scene, params, adjoint, o);
+        g.seconds = seconds_since(start); // with the calibration
+        return g;
     }
 
   private:
@@ -134,25 +126,14 @@ class PsdrMethod final : public DerivativeMethod {
         return c;
     }
 
-    std::string describe(const Scene& scene, const Parameters& params, const PsdrOptions& o) const {
-        const std::string vertex = image_space_first_vertex(scene, params, o.interior.first_vertex)
-                                       ? "image-space"
-                                       : "material-form";
-        const std::string estimator =
-            bidirectional_interior(scene, o.interior.estimator) ? "bidirectional" : "unidirectional";
-        if (!boundary_) return "interior term (" + estimator + "), " + vertex + " first vertex";
-        return "interior + boundary terms (" + describe_budget(o) + (manual_ ? ")" : ", calibrated)");
-    }
-
-    static void print_costs(const PsdrDerivative& d) {
+    static void print_costs(const DerivativeImage& d) {
         std::fprintf(stderr, "%-9s %12s %10s %12s %9s\n", "term", "samples", "rays/smp", "tape/smp",
                      "seconds");
-        for (size_t k = 0; k < d.cost.size(); ++k) {
-            const SampleCost& t = d.cost[k];
-            if (t.samples == 0) continue;
-            std::fprintf(stderr, "%-9s %12llu %10.2f %12.1f %9.2f\n", PsdrTermNames[k],
-                         (unsigned long long)t.samples, double(t.rays) / double(t.samples),
-                         double(t.tape_nodes) / double(t.samples), d.seconds[k]);
+        for (const DerivativeTerm& t : d.terms) {
+            if (t.cost.samples == 0) continue;
+            std::fprintf(stderr, "%-9s %12llu %10.2f %12.1f %9.2f\n", t.name.c_str(),
+                         (unsigned long long)t.cost.samples, double(t.cost.rays) / double(t.cost.samples),
+                         double(t.cost.tape_nodes) / double(t.cost.samples), t.seconds);
         }
     }
 

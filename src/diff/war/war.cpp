@@ -6,6 +6,8 @@
 #include "render/light_medium.h"
 #include "render/path_tracer.h"
 
+#include <cstdio>
+
 namespace penumbra {
 
 namespace {
@@ -171,6 +173,17 @@ PixelBoundary war_film_edge_term(const WarScene& c, uint64_t seed, int spp) {
         film_edge_strata(*c.scene.sensor->film, spp));
 }
 
+// "warped-area reparameterization (unidirectional), N_q = 64, sigma = 0.006, alpha = 3, spread = 0.012,
+// antithetic".
+std::string describe_war(const WarFieldOptions& f, bool bidirectional) {
+    char text[160];
+    std::snprintf(text, sizeof(text),
+                  "warped-area reparameterization (%s), N_q = %d, sigma = %g, alpha = %g, spread = %g%s",
+                  bidirectional ? "bidirectional" : "unidirectional", f.aux_count, double(f.sigma),
+                  double(f.exponent), double(f.spread), f.antithetic ? ", antithetic" : "");
+    return text;
+}
+
 } // namespace
 
 void set_war_samples(PixelLoop& loop, std::shared_ptr<const WarScene> field, WarSample sample,
@@ -182,6 +195,8 @@ void set_war_samples(PixelLoop& loop, std::shared_ptr<const WarScene> field, War
         });
     loop.film_edge = [field, spp = loop.options.spp](uint64_t seed) { return war_film_edge_term(*field, seed, spp); };
     loop.unwarped_delta_lights = method;
+    loop.description = describe_war(field->options, method == "war-bdpt");
+    loop.term = "warped-area";
 }
 
 void require_war_support(const Scene& scene, const Parameters& params) {

@@ -4,8 +4,6 @@
 #include "diff/method_adapter.h"
 #include "diff/war/war_bdpt.h"
 
-#include <cstdio>
-
 namespace penumbra {
 
 namespace {
@@ -20,33 +18,25 @@ class WarMethod final : public DerivativeMethod {
         f.spread = float(o.get_float("war-spread", f.spread));
         f.antithetic = !o.get_bool("no-antithetic", false);
         f.directions.antithetic = f.antithetic;
-        char text[160];
-        std::snprintf(text, sizeof(text),
-                      "warped-area reparameterization (%s), N_q = %d, sigma = %g, alpha = %g, spread = %g%s",
-                      bidirectional ? "bidirectional" : "unidirectional", f.aux_count, double(f.sigma),
-                      double(f.exponent), double(f.spread), f.antithetic ? ", antithetic" : "");
-        name_ = text;
     }
 
-    MethodDerivative derivative(const Scene& scene, const Parameters& params, const MethodRun& run) override {
+  protected:
+    DerivativeImage estimate_derivative(const Scene& scene, const Parameters& params,
+                                        const MethodRun& run) override {
         const WarOptions o = run_options(base_, scene, run, run.batches);
-        return one_term_derivative(
-            bidirectional_ ? war_bdpt_derivative(scene, params, o) : war_derivative(scene, params, o),
-            "warped-area", name_);
+        return bidirectional_ ? war_bdpt_derivative(scene, params, o) : war_derivative(scene, params, o);
     }
 
-    MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
-                            const MethodRun& run) override {
+    Gradient estimate_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                               const MethodRun& run) override {
         const WarOptions o = run_options(base_, scene, run, 1);
-        return method_gradient(bidirectional_ ? war_bdpt_gradient(scene, params, adjoint, o)
-                                              : war_gradient(scene, params, adjoint, o),
-                               name_);
+        return bidirectional_ ? war_bdpt_gradient(scene, params, adjoint, o)
+                              : war_gradient(scene, params, adjoint, o);
     }
 
   private:
     bool bidirectional_;
     WarOptions base_;
-    std::string name_;
 };
 
 // The options both estimators share: the field's (paper 000's parameters) and the auxiliary points'.

@@ -9,6 +9,9 @@
 #include "render/light_medium.h"
 #include "render/path_tracer.h"
 
+#include <cstdio>
+#include <string>
+
 namespace penumbra {
 
 namespace {
@@ -334,6 +337,16 @@ class WasTile final : public TileSamples {
     PixelLinearModel model_, previous_;
 };
 
+// "consistent warped-area sampling, N' = 32, kappa = 10000, antithetic, control variate".
+std::string describe_was(const WasOptions& o) {
+    char kappa[32];
+    std::snprintf(kappa, sizeof(kappa), "%g", double(o.warp.weight.kappa));
+    return std::string(o.warp.unbiased ? "unbiased" : "consistent") + " warped-area sampling, " +
+           (o.warp.unbiased ? "N' ~ Geom" : "N' = " + std::to_string(o.warp.aux_count)) +
+           ", kappa = " + kappa + (o.warp.antithetic ? ", antithetic" : "") +
+           (o.control_variate ? ", control variate" : "");
+}
+
 // The loop of was: its tiles (with the control variate in forward mode unless disabled or the filter is a
 // box, whose gradient term is all at its edges: the film-edge term) and the film-edge term.
 PixelLoop was_loop(const Scene& scene, const Parameters& params, const WasOptions& options, bool forward) {
@@ -344,6 +357,8 @@ PixelLoop was_loop(const Scene& scene, const Parameters& params, const WasOption
     loop.tiles = [c, control] { return std::make_unique<WasTile>(*c, control); };
     loop.film_edge = [c, spp = options.spp](uint64_t seed) { return pixel_edge_term(*c, seed, spp); };
     loop.unwarped_delta_lights = "was";
+    loop.description = describe_was(options);
+    loop.term = "warped-area";
     return loop;
 }
 

@@ -3,8 +3,6 @@
 #include "diff/method_adapter.h"
 #include "diff/was/warped_area.h"
 
-#include <cmath>
-
 namespace penumbra {
 
 namespace {
@@ -17,29 +15,21 @@ class WasMethod final : public DerivativeMethod {
         base_.warp.weight.kappa = float(o.get_float("was-kappa", base_.warp.weight.kappa));
         base_.warp.antithetic = !o.get_bool("no-antithetic", false);
         base_.control_variate = !o.get_bool("no-control-variate", false);
-
-        char kappa[32];
-        std::snprintf(kappa, sizeof(kappa), "%g", double(base_.warp.weight.kappa));
-        name_ = std::string(base_.warp.unbiased ? "unbiased" : "consistent") + " warped-area sampling, " +
-                (base_.warp.unbiased ? "N' ~ Geom" : "N' = " + std::to_string(base_.warp.aux_count)) +
-                ", kappa = " + kappa + (base_.warp.antithetic ? ", antithetic" : "") +
-                (base_.control_variate ? ", control variate" : "");
     }
 
-    MethodDerivative derivative(const Scene& scene, const Parameters& params, const MethodRun& run) override {
-        return one_term_derivative(was_derivative(scene, params, run_options(base_, scene, run, run.batches)),
-                                   "warped-area", name_);
+  protected:
+    DerivativeImage estimate_derivative(const Scene& scene, const Parameters& params,
+                                        const MethodRun& run) override {
+        return was_derivative(scene, params, run_options(base_, scene, run, run.batches));
     }
 
-    MethodGradient gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
-                            const MethodRun& run) override {
-        const WasOptions o = run_options(base_, scene, run, 1);
-        return method_gradient(was_gradient(scene, params, adjoint, o), name_);
+    Gradient estimate_gradient(const Scene& scene, const Parameters& params, const Image& adjoint,
+                               const MethodRun& run) override {
+        return was_gradient(scene, params, adjoint, run_options(base_, scene, run, 1));
     }
 
   private:
     WasOptions base_;
-    std::string name_;
 };
 
 } // namespace
