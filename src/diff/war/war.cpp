@@ -109,13 +109,13 @@ struct WarRule {
 // (diff/film_sample.h), the first vertex p^D_1 warped conditioned on the camera, and the camera factor
 // P_j(s(x1(θ))) |ds/dA|(θ) J (1 + ∇·v) / (p_s |ds/dA|(θ0)) of the material-form first vertex (paper 001).
 Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, AuxiliaryRng& rng, int px, int py,
-                          uint64_t& rays) {
+                          RayCounter& rays) {
     const Sensor& sensor = *c.scene.sensor;
     const Film& film = *sensor.film;
     const FilmSample fs = sample_film(*film.rfilter, sampler, false);
     const Vec2f center(px + 0.5f, py + 0.5f);
     const auto [ray, ray_weight] = sensor.sample_ray(center + fs.offset, sampler.next_2d());
-    ++rays;
+    ++rays.rays;
     const SurfaceInteraction3f first = c.scene.intersect(ray);
     if (!first.is_valid()) {
         const float w = film.filter_weight(px, py, center + fs.offset) / fs.pdf;
@@ -123,7 +123,7 @@ Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, AuxiliaryRng& r
                                         : c.form.environment(c.scene, ray.d) * Color3<Var>(ray_weight * w);
     }
     const WarNeighbor camera{Interaction3f{Infinity, ray.o, Vec3f(0.f)}, c.form.camera_position(ray.o)};
-    WarVertex x1 = war_vertex(c.field, first, camera, rng, rays);
+    WarVertex x1 = war_vertex(c.field, first, camera, rng, rays.rays);
     const Vec3<Var> p_cam = c.form.to_reference_camera(x1.si.p, ray.o);
     const Vec3<Var> n_cam = c.form.direction_to_reference_camera(x1.si.n);
     Vec2<Var> s;
@@ -132,10 +132,7 @@ Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, AuxiliaryRng& r
     const Var factor = film.filter_weight(px, py, s) * relative_change(jacobian * x1.jacobian) / Var(fs.pdf);
     x1.si.wi = x1.si.to_local(c.form.direction_from_reference_camera(sensor.to_sensor(p_cam)));
     WarRule rule{c, rng, x1.material, Vec3<Var>(ray.d), {}};
-    RayCounter counter;
-    const Color3<Var> L = trace_path<Var>(c.scene, sampler, ray, first, x1.si, rule, c.settings, counter);
-    rays += counter.rays;
-    return L * factor;
+    return trace_path<Var>(c.scene, sampler, ray, first, x1.si, rule, c.settings, rays) * factor;
 }
 
 // ṡ · across at a point s of a pixel edge or of the film's edge: the film velocity
@@ -191,7 +188,7 @@ void set_war_samples(PixelLoop& loop, std::shared_ptr<const WarScene> field, War
     loop.tiles =
         per_sample([sample = std::move(sample)](Sampler& sampler, const PixelSample& s, RayCounter& rays) {
             AuxiliaryRng rng(s.seed, s.pixel, uint64_t(s.m), WarSalt);
-            return sample(sampler, rng, s.x, s.y, rays.rays);
+            return sample(sampler, rng, s.x, s.y, rays);
         });
     loop.film_edge = [field, spp = loop.options.spp](uint64_t seed) { return war_film_edge_term(*field, seed, spp); };
     loop.unwarped_delta_lights = method;

@@ -40,7 +40,7 @@ struct WarOptions : PixelOptions {
 void require_war_support(const Scene& scene, const Parameters& params);
 
 // One camera sample of pixel (x, y) with its auxiliary stream: war's and war-bdpt's per-sample functions.
-using WarSample = std::function<Color3<Var>(Sampler&, AuxiliaryRng&, int x, int y, uint64_t& rays)>;
+using WarSample = std::function<Color3<Var>(Sampler&, AuxiliaryRng&, int x, int y, RayCounter& rays)>;
 // The loop's samples (`sample` with the auxiliary stream of each camera sample), war's film-edge term (the
 // flux of the reparameterized first vertex across the edges where the filters jump, diff/pixel_boundary.h,
 // per batch seed) and the warning naming `method` for point and spot lights' shadows. `sample` and `field`
@@ -51,14 +51,14 @@ void set_war_samples(PixelLoop& loop, std::shared_ptr<const WarScene> field, War
 // War's or war-bdpt's loop: what the estimator shares across samples (`Context`, with the field as `field`),
 // made once, and `camera_sample` on every camera sample.
 template <typename Context>
-PixelLoop war_loop(const Scene& scene, const Parameters& params, const WarOptions& options,
-                   const std::string& method,
-                   Color3<Var> (*camera_sample)(const Context&, Sampler&, AuxiliaryRng&, int, int, uint64_t&)) {
+PixelLoop
+war_loop(const Scene& scene, const Parameters& params, const WarOptions& options, const std::string& method,
+         Color3<Var> (*camera_sample)(const Context&, Sampler&, AuxiliaryRng&, int, int, RayCounter&)) {
     PixelLoop loop(scene, params, options);
     const auto c = std::make_shared<const Context>(scene, params, options);
     set_war_samples(
         loop, {c, &c->field},
-        [c, camera_sample](Sampler& sampler, AuxiliaryRng& rng, int x, int y, uint64_t& rays) {
+        [c, camera_sample](Sampler& sampler, AuxiliaryRng& rng, int x, int y, RayCounter& rays) {
             return camera_sample(*c, sampler, rng, x, y, rays);
         },
         method);

@@ -99,7 +99,7 @@ bool camera_factor(const Context& c, const Shot& shot, const MeasuredVertex<Var>
 
 // Σ_{s, t≥2} C_{s,t} f̂(p̄; θ) / f̂(p̄; θ0) times z_1's camera factor: one camera sample (Eq. 54).
 Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng, int px, int py,
-                          uint64_t& rays) {
+                          RayCounter& rays) {
     thread_local BDPTSample sample;
     thread_local std::vector<MeasuredVertex<Var>> z, y, ys;
     thread_local std::vector<Vec3<Var>> z_material;
@@ -111,9 +111,8 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng,
     // The ray's weight is 1 for the sensors war accepts (one center of projection): the camera factor
     // carries W/p.
     const Shot shot{px, py, fs, sensor.sample_ray(center + fs.offset, sampler.next_2d()).first};
-    RayCounter counter;
-    sample.trace_recorded(c.bdpt, sampler, counter, shot.ray);
-    rays += counter.rays + 1;
+    sample.trace_recorded(c.bdpt, sampler, rays, shot.ray);
+    ++rays.rays;
     const std::vector<PathVertex>&camera_path = sample.camera, &light_path = sample.light;
     const BDPTRecord& record = sample.record;
     if (camera_path.size() < 2 || camera_path[1].infinite || record.count == 0) return Color3<Var>(Var(0.f));
@@ -127,7 +126,7 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng,
     const WarNeighbor camera{Interaction3f{Infinity, shot.ray.o, Vec3f(0.f)}, o};
     z.assign(2, MeasuredVertex<Var>());
     z_material.assign(2, o);
-    z[1] = warped_vertex(c, camera_path[1], true, camera, rng, rays, &z_material[1]);
+    z[1] = warped_vertex(c, camera_path[1], true, camera, rng, rays.rays, &z_material[1]);
     Var factor;
     if (!camera_factor(c, shot, z[1], factor)) return Color3<Var>(Var(0.f));
     z[1].jacobian = Var(1.f); // in the camera factor
@@ -139,7 +138,7 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng,
             continue;
         }
         const WarNeighbor previous{camera_path[k - 1].si, z_material[k - 1]};
-        z.push_back(warped_vertex(c, v, !camera_path[k - 1].delta, previous, rng, rays, &z_material[k]));
+        z.push_back(warped_vertex(c, v, !camera_path[k - 1].delta, previous, rng, rays.rays, &z_material[k]));
     }
     camera_prefix(z, o, record, c.form, camera_factors);
 
@@ -148,7 +147,8 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng,
     y.clear();
     for (size_t j = 0; j + 2 <= s_max; ++j) {
         const WarNeighbor toward{light_path[j + 1].si, c.form.vertex(light_path[j + 1].si).p};
-        y.push_back(warped_vertex(c, light_path[j], j == 0 || !light_path[j - 1].delta, toward, rng, rays));
+        y.push_back(
+            warped_vertex(c, light_path[j], j == 0 || !light_path[j - 1].delta, toward, rng, rays.rays));
     }
     light_prefix(y, record, c.form, light_factors);
 
@@ -158,12 +158,12 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng,
         if (s == 1 && st.light_sample.emitter->shape()) {
             const Vec3<Var> camera_side = t == 2 ? o : z[t - 2].p;
             return area_light_connection(c, st, z[t - 1], camera_side, camera_factors[t - 1], here, rng,
-                                         rays);
+                                         rays.rays);
         }
         if (s < 2) return path_measurement(st, z, y, camera_factors, light_factors, o, c.scene, c.form);
         // y_{s−1} warped given z_{t−1} in place of its warp given y_s.
         ys.assign(y.begin(), y.begin() + std::ptrdiff_t(s - 1));
-        ys.push_back(warped_vertex(c, light_path[s - 1], !light_path[s - 2].delta, here, rng, rays));
+        ys.push_back(warped_vertex(c, light_path[s - 1], !light_path[s - 2].delta, here, rng, rays.rays));
         heads.assign(light_factors.begin(), light_factors.begin() + std::ptrdiff_t(s - 1));
         heads.push_back(light_head(c, record, ys, light_factors, ys.back(), s - 1));
         return path_measurement(st, z, ys, camera_factors, heads, o, c.scene, c.form);
