@@ -81,15 +81,18 @@ void require_bidirectional_support(const Scene& scene) {
                     "): use --interior-estimator unidirectional");
 }
 
+BDPTPass bidirectional_pass(const Scene& scene, const PathSettings& path) {
+    return BDPTPass(scene, bdpt_settings(scene, path), false);
+}
+
 // Σ_{s, t>=2} C_{s,t} f(x̄; θ) / f(x̄; θ0) times the camera factor (paper 001 §7 with §5.1's first vertex).
-Color3<Var> bidirectional_camera_path(const Scene& scene, const MaterialForm& form, Sampler& sampler,
+Color3<Var> bidirectional_camera_path(const BDPTPass& pass, const MaterialForm& form, Sampler& sampler,
                                       const Ray& ray, const Color3f& ray_weight, const CameraFactor& camera,
-                                      float escaped_weight, const PathSettings& settings, RayCounter& rays) {
+                                      float escaped_weight, RayCounter& rays) {
     thread_local BDPTSample sample;
     thread_local std::vector<MeasuredVertex<Var>> z, y;
     thread_local std::vector<Color3<Var>> camera_factors, light_factors;
-    // No sensor connection: light tracing (t = 1) is neither sampled nor counted in the MIS weights.
-    sample.trace_recorded(BDPTPass(scene, bdpt_settings(scene, settings), false), sampler, rays, ray);
+    sample.trace_recorded(pass, sampler, rays, ray);
     const std::vector<PathVertex>& camera_path = sample.camera;
     const BDPTRecord& record = sample.record;
     if (camera_path.size() < 2 || record.count == 0) return Color3<Var>(Var(0.f));
@@ -118,7 +121,7 @@ Color3<Var> bidirectional_camera_path(const Scene& scene, const MaterialForm& fo
     light_prefix(y, record, form, light_factors);
 
     const Color3<Var> L = reweighted_strategies(record, [&](const StrategyRecord& st) {
-        return path_measurement(st, z, y, camera_factors, light_factors, o, scene, form);
+        return path_measurement(st, z, y, camera_factors, light_factors, o, pass.scene, form);
     });
     return L * Color3<Var>(ray_weight) * camera_factor;
 }

@@ -19,6 +19,7 @@
 // unidirectional estimator.
 #pragma once
 #include "diff/psdr/interior_media.h"
+#include "render/bdpt_sample.h"
 #include "render/bdpt_subpaths.h"
 #include "render/integrator_settings.h"
 
@@ -37,10 +38,13 @@ bool bidirectional_interior(const Scene& scene, InteriorEstimator estimator);
 // Throws when the scene has what the bidirectional estimator does not differentiate (see above).
 void require_bidirectional_support(const Scene& scene);
 
-// W/p · L(x1 → camera) along one camera sample's bidirectional strategies, on the tape; the arguments are
-// volumetric_camera_path's (diff/psdr/interior_media.h).
-Color3<Var> bidirectional_camera_path(const Scene& scene, const MaterialForm& form, Sampler& sampler,
+// The pass of the bidirectional estimator: the scene's bdpt settings (or `path`'s), without light tracing
+// (t = 1 is neither sampled nor counted in the MIS weights).
+BDPTPass bidirectional_pass(const Scene& scene, const PathSettings& path);
+// W/p · L(x1 → camera) along one camera sample's bidirectional strategies, on the tape; the other arguments
+// are volumetric_camera_path's (diff/psdr/interior_media.h).
+Color3<Var> bidirectional_camera_path(const BDPTPass& pass, const MaterialForm& form, Sampler& sampler,
                                       const Ray& ray, const Color3f& ray_weight, const CameraFactor& camera,
-                                      float escaped_weight, const PathSettings& settings, RayCounter& rays);
+                                      float escaped_weight, RayCounter& rays);
 
 } // namespace penumbra

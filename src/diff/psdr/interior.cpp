@@ -16,13 +16,13 @@ namespace {
 // importance sampling, as the renderer does (stratified over the pixel's samples), and its ray stays fixed;
 // x1(θ) slides along it with the surface (MaterialForm::ray_vertex). The camera factor W_j / p is the renderer's sample weight, independent of θ.
 Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sampler& sampler, int x, int y,
-                               const PixelStratum& stratum, bool media, bool bidirectional, const PathSettings& settings,
-                               RayCounter& rays) {
+                               const PixelStratum& stratum, bool media, const BDPTPass* bdpt,
+                               const PathSettings& settings, RayCounter& rays) {
     const Sensor& sensor = *scene.sensor;
     const Vec2f pos = sensor.film->sample_position(x, y, stratum(sampler.next_2d()));
     const auto [ray, ray_weight] = sensor.sample_ray(pos, sampler.next_2d());
     ++rays.rays;
-    if (bidirectional) return bidirectional_camera_path(scene, form, sampler, ray, ray_weight, {}, 1.f, settings, rays);
+    if (bdpt) return bidirectional_camera_path(*bdpt, form, sampler, ray, ray_weight, {}, 1.f, rays);
     if (media) return volumetric_camera_path(scene, form, sampler, ray, ray_weight, {}, 1.f, settings, rays);
     const SurfaceInteraction3f first = scene.intersect(ray);
     if (!first.is_valid())
@@ -37,10 +37,10 @@ Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sam
 // W_j / p = P_j(s(θ)) |ds/dA|(θ) J(p1) / (p_s |ds/dA|(θ0)) (the pinhole importance of Eqs. 22-23 written on the
 // film, P_j the normalized reconstruction filter of pixel j, s the projection of x1).
 Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sampler& sampler, int x, int y,
-                                const PixelStratum& stratum, bool mirror, bool media, bool bidirectional,
+                                const PixelStratum& stratum, bool mirror, bool media, const BDPTPass* bdpt,
                                 const PathSettings& settings, RayCounter& rays) {
     if (form.image_space_first_vertex())
-        return sample_image_space(scene, form, sampler, x, y, stratum, media, bidirectional, settings, rays);
+        return sample_image_space(scene, form, sampler, x, y, stratum, media, bdpt, settings, rays);
     const Sensor& sensor = *scene.sensor;
     const ReconstructionFilter& filter = *sensor.film->rfilter;
     const FilmSample fs = sample_film(filter, sampler, mirror);
@@ -48,7 +48,7 @@ Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sa
     const auto [ray, ray_weight] = sensor.sample_ray(center + fs.offset, sampler.next_2d());
     ++rays.rays;
     const Vec3f camera = sensor.to_world.apply_point(Vec3f(0.f));
-    if (media || bidirectional) {
+    if (media || bdpt) {
         // W_j / p = P_j(s(θ)) |ds/dA|(θ) J / (p_s |ds/dA|(θ0)); a medium vertex's |ds/dA| has the normal
         // toward the camera (|ds/dω| / ℓ², the volume measure).
         const CameraFactor factor = [&](const Vec3<Var>& p, const Vec3<Var>& n, const Var& jacobian) {
@@ -59,8 +59,8 @@ Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sa
             return sensor.film->filter_weight(x, y, s) * relative_change(film_jacobian * jacobian) / Var(fs.pdf);
         };
         const float escaped = sensor.film->filter_weight(x, y, center + fs.offset) / fs.pdf;
-        if (bidirectional)
-            return bidirectional_camera_path(scene, form, sampler, ray, ray_weight, factor, escaped, settings, rays);
+        if (bdpt)
+            return bidirectional_camera_path(*bdpt, form, sampler, ray, ray_weight, factor, escaped, rays);
         return volumetric_camera_path(scene, form, sampler, ray, ray_weight, factor, escaped, settings, rays);
     }
     const SurfaceInteraction3f first = scene.intersect(ray);
@@ -90,16 +90,19 @@ void set_interior_samples(PixelLoop& loop, std::shared_ptr<const MaterialForm> f
                           const DiffOptions& options) {
     const Scene& scene = loop.scene;
     const bool media = scene_has_media(scene);
-    const bool bidirectional = bidirectional_interior(scene, options.estimator);
     const bool antithetic = options.antithetic && !form->image_space_first_vertex();
     loop.antithetic = antithetic;
     const int spp = options.spp;
     const PathSettings settings = options.path;
-    loop.tiles = per_sample([&scene, form, media, bidirectional, antithetic, spp,
+    const std::shared_ptr<const BDPTPass> bdpt =
+        bidirectional_interior(scene, options.estimator)
+            ? std::make_shared<const BDPTPass>(bidirectional_pass(scene, settings))
+            : nullptr;
+    loop.tiles = per_sample([&scene, form, media, bdpt, antithetic, spp,
                              settings](Sampler& sampler, const PixelSample& s, RayCounter& rays) {
         const bool mirror = antithetic && (s.m & 1);
         const PixelStratum stratum(s.m, spp, s.seed, s.pixel);
-        return sample_contribution(scene, *form, sampler, s.x, s.y, stratum, mirror, media, bidirectional,
+        return sample_contribution(scene, *form, sampler, s.x, s.y, stratum, mirror, media, bdpt.get(),
                                    settings, rays);
     });
 }
