@@ -2,7 +2,7 @@
 // an estimator's options for one run.
 #pragma once
 #include "diff/method.h"
-#include "render/integrator_settings.h"
+#include "scene/integrator_settings.h"
 
 #include <algorithm>
 

@@ -55,6 +55,7 @@ struct AOV {
     AOVType type;
 };
 
+class Scene;
 struct IntegratorSettings;
 
 // An integrator nested in `aov` or `moment`, with its name (`name` attribute, or `_arg_<i>`).
@@ -78,5 +79,15 @@ struct IntegratorSettings final : public Object {
 // Whether the plugin renders by camera ray (render's SamplingIntegrator): path, volpath, volpathmis, direct,
 // aov, moment.
 bool camera_driven(const std::string& plugin);
+
+// What the derivative estimators follow of the scene's integrator:
+// the path settings of its `path`, `volpath`, `volpathmis` or `bdpt` integrator (defaults otherwise);
+PathSettings path_settings(const Scene& scene);
+// the bdpt integrator's settings (strategy views off), or `path`'s for other integrators (power heuristic);
+BDPTSettings bdpt_settings(const Scene& scene, const PathSettings& path);
+// whether it is `bdpt`;
+bool scene_integrator_is_bdpt(const Scene& scene);
+// its `sppm` settings, or null when it is another.
+const SPPMSettings* sppm_settings(const Scene& scene);
 
 } // namespace penumbra

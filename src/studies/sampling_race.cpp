@@ -6,8 +6,8 @@
 #include "core/rng.h"
 #include "diff/paths/path_sampling.h"
 #include "optim/adam.h"
-#include "render/integrator_settings.h"
 #include "render/render.h"
+#include "scene/integrator_settings.h"
 #include "studies/variance_study.h"
 
 #include <algorithm>

@@ -2,8 +2,8 @@
 
 #include "core/error.h"
 #include "core/rng.h"
-#include "render/integrator_settings.h"
 #include "render/render.h"
+#include "scene/integrator_settings.h"
 
 #include <nlohmann/json.hpp>
 

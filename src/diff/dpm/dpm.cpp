@@ -8,11 +8,12 @@
 #include "diff/material_form.h"
 #include "diff/pixel_driver.h"
 #include "diff/vertex_normals.h"
-#include "render/integrator_settings.h"
 #include "render/light_medium.h"
 #include "render/photon_gather.h"
 #include "render/photon_tracing.h"
+#include "render/sppm.h"
 #include "render/tiles.h"
+#include "scene/integrator_settings.h"
 
 #include <tbb/enumerable_thread_specific.h>
 

@@ -21,7 +21,7 @@
 #include "diff/psdr/interior_media.h"
 #include "render/bdpt_sample.h"
 #include "render/bdpt_subpaths.h"
-#include "render/integrator_settings.h"
+#include "scene/integrator_settings.h"
 
 #include <string>
 

@@ -3,7 +3,7 @@
 #include "diff/film_sample.h"
 #include "diff/path_measurement.h"
 #include "render/bdpt_sample.h"
-#include "render/integrator_settings.h"
+#include "scene/integrator_settings.h"
 
 #include <algorithm>
 
