@@ -9,8 +9,10 @@
 //   delta tracking    Tr(θ) σs(x(θ)) / p ≈ Π_j (μ − σt(y_j) ℓ/ℓ0) / (μ P_null,j) · σs(x) / (μ P_real)
 // (the null-collision form of Miller et al. 2019 with detached event probabilities P); at θ0 these are the
 // weights the samplers use. Homogeneous media keep the closed forms exp(−σt ℓ(θ)) over the detached density.
-// The change of measure of the vertex itself, ℓ0²/ℓ² · J, is the caller's.
+// The change of measure of the vertex itself, ℓ0²/ℓ² · J, is the caller's. A leg that crosses index-matched
+// surfaces is a chain of such pieces (LegChain, recorded by render/null_walk.h).
 #pragma once
+#include "scene/interaction.h"
 #include "scene/medium.h"
 
 #include <vector>
@@ -36,6 +38,31 @@ struct FlightRecord {
         real_probability = 1.f;
         collisions.clear();
     }
+};
+
+// One straight piece of a chain of legs through null surfaces: travelled in `medium` (null: vacuum) and
+// ending at `bound`, the surface its ray met (invalid: none), which is crossed unless it is the chain's end.
+struct LegPiece {
+    const Medium* medium = nullptr;
+    SurfaceInteraction3f bound;
+    float start = 0.f; // reference distance of the piece's start from the chain's start
+    FlightRecord record;
+};
+
+// The pieces of one chain (kept across steps to reuse their storage).
+struct LegChain {
+    std::vector<LegPiece> pieces;
+    int count = 0;
+
+    LegPiece& add(const Medium* medium, float start) {
+        if (count == int(pieces.size())) pieces.emplace_back();
+        LegPiece& p = pieces[size_t(count++)];
+        p.medium = medium;
+        p.bound = SurfaceInteraction3f();
+        p.start = start;
+        return p;
+    }
+    void clear() { count = 0; }
 };
 
 namespace flight_detail {

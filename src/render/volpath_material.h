@@ -22,6 +22,7 @@
 #include "render/hero_free_flight.h"
 #include "render/medium_sampling.h"
 #include "render/mis.h"
+#include "render/null_walk.h"
 #include "render/path_tracer.h"
 #include "render/volume_visibility.h"
 
@@ -46,45 +47,37 @@ struct ChainEnd {
 inline ChainEnd sample_chain(const Scene& scene, Ray ray, const Medium* medium, int hero, Sampler& sampler,
                              LegChain& chain, Color3f& weight, Color3f& ratio, RayCounter& rays) {
     ChainEnd end;
-    chain.clear();
     weight = Color3f(1.f);
-    float travelled = 0.f;
-    for (int crossing = 0; crossing < 256; ++crossing) {
-        const SurfaceInteraction3f si = scene.intersect(ray);
-        LegPiece& piece = chain.add(medium, travelled);
-        piece.bound = si;
-        if (medium) {
-            const HeroFreeFlight ff = sample_free_flight_hero(
-                *medium, ray.o, ray.d, si.is_valid() ? si.t : Infinity, hero, sampler, &piece.record);
+    const NullWalk w = walk_null_surfaces<NullWalkRule{.count_after_spawn = true}>(
+        scene, ray, medium, rays, &chain, [&](const Medium* m, const Ray& r, float tmax, FlightRecord* record) {
+            if (!m) return true;
+            const HeroFreeFlight ff = sample_free_flight_hero(*m, r.o, r.d, tmax, hero, sampler, record);
             weight *= ff.weight;
             ratio *= ff.ratio;
-            if (ff.event == FreeFlightSample::Event::Absorbed || is_black(weight)) return end;
-            if (ff.event == FreeFlightSample::Event::Scattered) {
-                end.kind = ChainEnd::Kind::Medium;
-                end.p = ff.p;
-                end.medium = medium;
-                end.distance = travelled + ff.t;
-                return end;
-            }
-        }
-        if (!si.is_valid()) {
-            end.kind = ChainEnd::Kind::Escaped;
-            end.distance = Infinity;
-            return end;
-        }
-        const BSDF* bsdf = si.bsdf();
-        if (!bsdf || bsdf->flags() != BSDFNull) {
-            end.kind = ChainEnd::Kind::Surface;
-            end.si = si;
-            end.si.t = travelled + si.t;
-            end.medium = medium;
-            end.distance = end.si.t;
-            return end;
-        }
-        medium = target_medium(*si.shape, si.n, ray.d, medium);
-        travelled += si.t;
-        ray = si.spawn_ray(ray.d);
-        ++rays.rays;
+            if (ff.event == FreeFlightSample::Event::Absorbed || is_black(weight)) return false;
+            if (ff.event != FreeFlightSample::Event::Scattered) return true;
+            end.kind = ChainEnd::Kind::Medium;
+            end.p = ff.p;
+            end.medium = m;
+            end.distance = ff.t;
+            return false;
+        });
+    switch (w.end) {
+    case NullWalk::End::Stopped:
+        if (end.kind == ChainEnd::Kind::Medium) end.distance = w.travelled + end.distance;
+        break;
+    case NullWalk::End::Escaped:
+        end.kind = ChainEnd::Kind::Escaped;
+        end.distance = Infinity;
+        break;
+    case NullWalk::End::Surface:
+        end.kind = ChainEnd::Kind::Surface;
+        end.si = w.si;
+        end.si.t = w.travelled + w.si.t;
+        end.medium = w.medium;
+        end.distance = end.si.t;
+        break;
+    default: break;
     }
     return end;
 }
