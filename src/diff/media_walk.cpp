@@ -10,8 +10,9 @@ FlightEnd sample_interaction(const Scene& scene, Ray ray, const Medium* medium, 
     FlightEnd out;
     Color3f weight(1.f);
     bool scattered = false;
+    SurfaceInteraction3f hit;
     const NullWalk w = walk_null_surfaces<NullWalkRule{}>(
-        scene, ray, medium, rays, nullptr, [&](const Medium* m, const Ray& r, float end, FlightRecord*) {
+        scene, ray, medium, rays, nullptr, hit, [&](const Medium* m, const Ray& r, float end, FlightRecord*) {
             if (!m) return true;
             if (!volume_vertices) {
                 weight *= transmittance(*m, r.o, r.d, end, sampler);
@@ -34,8 +35,8 @@ FlightEnd sample_interaction(const Scene& scene, Ray ray, const Medium* medium, 
         break;
     case NullWalk::End::Surface:
         out.kind = FlightEnd::Kind::Surface;
-        out.si = w.si;
-        out.p = w.si.p;
+        out.si = hit;
+        out.p = hit.p;
         break;
     default:
         return FlightEnd{}; // a walk stuck on coincident surfaces
@@ -46,13 +47,14 @@ FlightEnd sample_interaction(const Scene& scene, Ray ray, const Medium* medium, 
 }
 
 SurfaceInteraction3f first_opaque_hit(const Scene& scene, Ray ray, RayCounter& rays) {
-    NullWalk w = walk_null_surfaces<NullWalkRule{.bounded = true}>(scene, ray, nullptr, rays, nullptr,
-                                                                   no_segment_action);
+    SurfaceInteraction3f hit;
+    const NullWalk w = walk_null_surfaces<NullWalkRule{.bounded = true}>(scene, ray, nullptr, rays, nullptr,
+                                                                         hit, no_segment_action);
     if (w.end == NullWalk::End::Surface)
-        w.si.t = norm(w.si.p - ray.o);
+        hit.t = norm(hit.p - ray.o);
     else if (w.end != NullWalk::End::Escaped)
         return SurfaceInteraction3f{};
-    return w.si;
+    return hit;
 }
 
 } // namespace penumbra

@@ -64,8 +64,9 @@ void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, 
             if (chains->size() <= path.size()) chains->resize(path.size() + 1);
             chain = &(*chains)[path.size()];
         }
+        SurfaceInteraction3f hit;
         const NullWalk w = walk_null_surfaces<NullWalkRule{.hit_after_bound_ends = true}>(
-            c.scene, ray, medium, ctx.rays, chain,
+            c.scene, ray, medium, ctx.rays, chain, hit,
             [&](const Medium* m, const Ray& r, float tmax, FlightRecord* record) {
                 if (m) {
                     const FreeFlightSample ff = sample_free_flight(*m, r.o, r.d, tmax, ctx.sampler, record);
@@ -83,7 +84,6 @@ void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, 
                 return true;
             });
         if (absorbed) return;
-        const SurfaceInteraction3f& hit = w.si;
         medium = w.medium;
         ray = w.ray;
         const size_t prev_index = path.size() - 1;
@@ -254,8 +254,9 @@ std::pair<float, float> connection_free_flight(BDPTContext& ctx, const PathVerte
     if (!ctx.has_media) return {1.f, 1.f};
     thread_local std::vector<Piece> pieces;
     pieces.clear();
+    SurfaceInteraction3f hit;
     walk_null_surfaces<NullWalkRule{.bounded = true}>(
-        ctx.scene, ray_between(a, b.p), medium, ctx.rays, nullptr,
+        ctx.scene, ray_between(a, b.p), medium, ctx.rays, nullptr, hit,
         [&](const Medium* m, const Ray& r, float end, FlightRecord*) {
             pieces.push_back({m, r.o, r.d, end});
             return true;

@@ -21,7 +21,8 @@ const Medium* medium_at(const Scene& scene, const Vec3f& x, RayCounter& rays) {
     const float dist = norm(to_x);
     if (!(dist > 0.f)) return medium;
     constexpr NullWalkRule every_surface{.every_surface = true, .bounded = true};
-    return walk_null_surfaces<every_surface>(scene, Ray(o, to_x / dist, dist), medium, rays, nullptr,
+    SurfaceInteraction3f hit;
+    return walk_null_surfaces<every_surface>(scene, Ray(o, to_x / dist, dist), medium, rays, nullptr, hit,
                                              no_segment_action)
         .medium;
 }

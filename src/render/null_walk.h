@@ -43,49 +43,49 @@ inline Ray ray_beyond(const Ray& ray, const SurfaceInteraction3f& si) {
 }
 
 // How a walk ended: the segment policy stopped it (a scattering event, absorption), at a surface it does not
-// cross, with the ray escaping (or, bounded, meeting nothing before tmax), at the end of a bounded segment
-// just beyond a crossing, or after MaxNullCrossings crossings.
+// cross (the walk's last hit), with the ray escaping (or, bounded, meeting nothing before tmax), at the end
+// of a bounded segment just beyond a crossing, or after MaxNullCrossings crossings.
 struct NullWalk {
     enum class End { Stopped, Surface, Escaped, Reached, Exhausted };
     End end = End::Exhausted;
-    SurfaceInteraction3f si;        // the last hit (Surface: the surface that ends the walk)
     Ray ray;                        // the last ray traced (Reached, Exhausted: the next one)
     const Medium* medium = nullptr; // the medium of the last piece (Reached, Exhausted: beyond the crossing)
     float travelled = 0.f;          // distance from the walk's start to ray.o, summed over the hits
 };
 
-// Walks `ray` from `medium` (null: vacuum). segment(medium, ray, end, record) acts on each piece [0, end) of
-// a ray in `medium` (end: the hit's distance, or the ray's tmax — infinite when unbounded — if it hits
-// nothing) with the piece's FlightRecord (null without `chain`), and returns false to stop the walk there.
+// Walks `ray` from `medium` (null: vacuum); `hit` receives each hit, the walk's last at its end.
+// segment(medium, ray, end, record) acts on each piece [0, end) of a ray in `medium` (end: the hit's
+// distance, or the ray's tmax — infinite when unbounded — if it hits nothing) with the piece's FlightRecord
+// (null without `chain`), and returns false to stop the walk there.
 template <NullWalkRule Rule, typename Segment>
 NullWalk walk_null_surfaces(const Scene& scene, const Ray& ray, const Medium* medium, RayCounter& rays,
-                            LegChain* chain, Segment&& segment) {
+                            LegChain* chain, SurfaceInteraction3f& hit, Segment&& segment) {
     NullWalk w;
     w.ray = ray;
     w.medium = medium;
     if (chain) chain->clear();
     for (int crossing = 0;; ++crossing) {
         if constexpr (!Rule.count_after_spawn) ++rays.rays;
-        w.si = scene.intersect(w.ray);
-        const float end = w.si.is_valid() ? w.si.t : (Rule.bounded ? w.ray.tmax : Infinity);
+        hit = scene.intersect(w.ray);
+        const float end = hit.is_valid() ? hit.t : (Rule.bounded ? w.ray.tmax : Infinity);
         LegPiece* piece = chain ? &chain->add(w.medium, w.travelled) : nullptr;
-        if (piece) piece->bound = w.si;
+        if (piece) piece->bound = hit;
         if (!segment(w.medium, w.ray, end, piece ? &piece->record : nullptr)) {
             w.end = NullWalk::End::Stopped;
             return w;
         }
-        if (!w.si.is_valid()) {
+        if (!hit.is_valid()) {
             w.end = NullWalk::End::Escaped;
             return w;
         }
         if ((Rule.hit_after_bound_ends && crossing == MaxNullCrossings) ||
-            !(Rule.every_surface || is_pure_null(w.si))) {
+            !(Rule.every_surface || is_pure_null(hit))) {
             w.end = NullWalk::End::Surface;
             return w;
         }
-        w.medium = target_medium(*w.si.shape, w.si.n, w.ray.d, w.medium);
-        w.travelled += w.si.t;
-        w.ray = Rule.bounded ? ray_beyond(w.ray, w.si) : w.si.spawn_ray(w.ray.d);
+        w.medium = target_medium(*hit.shape, hit.n, w.ray.d, w.medium);
+        w.travelled += hit.t;
+        w.ray = Rule.bounded ? ray_beyond(w.ray, hit) : hit.spawn_ray(w.ray.d);
         if constexpr (Rule.count_after_spawn) ++rays.rays;
         if (Rule.bounded && !(w.ray.tmax > 0.f)) {
             w.end = NullWalk::End::Reached;

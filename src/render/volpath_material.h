@@ -49,7 +49,8 @@ inline ChainEnd sample_chain(const Scene& scene, Ray ray, const Medium* medium, 
     ChainEnd end;
     weight = Color3f(1.f);
     const NullWalk w = walk_null_surfaces<NullWalkRule{.count_after_spawn = true}>(
-        scene, ray, medium, rays, &chain, [&](const Medium* m, const Ray& r, float tmax, FlightRecord* record) {
+        scene, ray, medium, rays, &chain, end.si,
+        [&](const Medium* m, const Ray& r, float tmax, FlightRecord* record) {
             if (!m) return true;
             const HeroFreeFlight ff = sample_free_flight_hero(*m, r.o, r.d, tmax, hero, sampler, record);
             weight *= ff.weight;
@@ -72,12 +73,12 @@ inline ChainEnd sample_chain(const Scene& scene, Ray ray, const Medium* medium, 
         break;
     case NullWalk::End::Surface:
         end.kind = ChainEnd::Kind::Surface;
-        end.si = w.si;
-        end.si.t = w.travelled + w.si.t;
+        end.si.t = w.travelled + end.si.t;
         end.medium = w.medium;
         end.distance = end.si.t;
         break;
-    default: break;
+    default:
+        break;
     }
     return end;
 }
@@ -298,7 +299,8 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
         v = next;
 
         // Russian roulette on the estimate factor (without the free-flight ratio).
-        if (depth + 1 >= unsigned(settings.rr_depth) && !survives_roulette(throughput, eta, sampler, mean_ratio))
+        if (depth + 1 >= unsigned(settings.rr_depth) &&
+            !survives_roulette(throughput, eta, sampler, mean_ratio))
             break;
     }
     return L;

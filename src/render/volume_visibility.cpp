@@ -8,8 +8,9 @@ namespace penumbra {
 Color3f segment_transmittance(const Scene& scene, Ray ray, const Medium* medium, Sampler& sampler,
                               RayCounter& rays, const Medium** end_medium, LegChain* pieces) {
     Color3f tr(1.f);
+    SurfaceInteraction3f hit;
     const NullWalk w = walk_null_surfaces<NullWalkRule{.bounded = true}>(
-        scene, ray, medium, rays, pieces,
+        scene, ray, medium, rays, pieces, hit,
         [&](const Medium* m, const Ray& r, float end, FlightRecord* record) {
             if (m) tr *= transmittance(*m, r.o, r.d, end, sampler, record);
             return !is_black(tr);
