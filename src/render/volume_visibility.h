@@ -13,7 +13,7 @@ namespace penumbra {
 // vacuum). Zero if an opaque surface lies on the segment. Transmittance inside heterogeneous media is an
 // unbiased estimate (ratio tracking). Counts the rays it traces. `end_medium` (optional) receives the medium
 // at the segment's end; `pieces` (optional) the segment's pieces between crossings with their ratio-tracking
-// records, for re-evaluation on a moving segment (render/volpath_material.h chain_weight).
+// records, for re-evaluation on a moving segment (render/flight_record.h chain_weight).
 Color3f segment_transmittance(const Scene& scene, Ray ray, const Medium* medium, Sampler& sampler,
                               RayCounter& rays, const Medium** end_medium = nullptr,
                               LegChain* pieces = nullptr);

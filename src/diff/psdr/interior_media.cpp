@@ -1,6 +1,6 @@
 #include "diff/psdr/interior_media.h"
 
-#include "render/volpath_material.h"
+#include "render/volpath_tracer.h"
 
 namespace penumbra {
 
@@ -11,11 +11,11 @@ Color3<Var> volumetric_camera_path(const Scene& scene, const MaterialForm& form,
     const bool image = form.image_space_first_vertex();
     const Vec3f o0 = ray.o;
     const Vec3<Var> o = image ? Vec3<Var>(o0) : form.camera_position(o0);
-    Color3f flight, ratio(1.f);
-    const int hero = std::min(int(sampler.next_1d() * 3.f), 2);
+    Color3f flight;
+    SpectralFlights flights{SpectralMIS::PerPath, sample_hero_channel(sampler)};
     const ChainEnd end =
-        sample_chain(scene, ray, sensor_medium(scene), hero, sampler, chain, flight, ratio, rays);
-    const float mean_ratio = (ratio.x + ratio.y + ratio.z) / 3.f;
+        sample_chain(scene, ray, sensor_medium(scene), flights, sampler, &chain, flight, rays);
+    const float mean_ratio = flights.mean_ratio();
     const Color3<Var> zero(Var(0.f));
     if (end.kind == ChainEnd::Kind::Absorbed || settings.max_depth == 0) return zero;
 
@@ -69,7 +69,7 @@ Color3<Var> volumetric_camera_path(const Scene& scene, const MaterialForm& form,
     if (x1.surface && !settings.hide_emitters)
         if (const Emitter* e = end.si.emitter()) L += e->eval(x1.si) / Var(mean_ratio);
     if (settings.max_depth != 1)
-        L += trace_volpath_from<Var>(scene, sampler, x1, o, o0, hero, ratio, form, settings, rays);
+        L += trace_volpath_from<Var>(scene, sampler, x1, o, o0, flights, form, settings, rays);
     return L * along * Color3<Var>(ray_weight) * factor;
 }
 
