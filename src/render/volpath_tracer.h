@@ -68,11 +68,10 @@ struct SpectralFlights {
     float mean_ratio() const { return (ratio.x + ratio.y + ratio.z) / 3.f; }
 };
 
-// How a chain ended.
+// How a chain ended (its last hit is the caller's: see sample_chain).
 struct ChainEnd {
     enum class Kind { Surface, Medium, Escaped, Absorbed } kind = Kind::Absorbed;
-    SurfaceInteraction3f si; // the last hit; Surface: the vertex (t: its reference distance from the start)
-    Vec3f p;                 // Medium: the scattering point
+    Vec3f p; // Medium: the scattering point
     const Medium* medium =
         nullptr;          // the medium at the end (Medium: the vertex's; Surface: the arriving side)
     float distance = 0.f; // reference distance from the chain's start to the end
@@ -80,15 +79,16 @@ struct ChainEnd {
 
 // Samples a chain from `ray` (starting in `medium`, the ray counted by the caller): free flights in media by
 // `flights`, crossing pure-null surfaces, until a scattering event, a surface with another BSDF, or escape.
-// `weight` receives the float free-flight weight (f/p_hero for PerPath); `chain` (optional) the pieces with
+// `hit` receives the chain's last hit (Surface: the vertex, its t the reference distance from the chain's
+// start), `weight` the float free-flight weight (f/p_hero for PerPath), `chain` (optional) the pieces with
 // their flight records. A walk stuck on coincident surfaces ends the chain as absorbed.
 inline ChainEnd sample_chain(const Scene& scene, const Ray& ray, const Medium* medium,
-                             SpectralFlights& flights, Sampler& sampler, LegChain* chain, Color3f& weight,
-                             RayCounter& rays) {
+                             SpectralFlights& flights, Sampler& sampler, LegChain* chain,
+                             SurfaceInteraction3f& hit, Color3f& weight, RayCounter& rays) {
     ChainEnd end;
     weight = Color3f(1.f);
     const NullWalk w = walk_null_surfaces<NullWalkRule{.count_after_spawn = true}>(
-        scene, ray, medium, rays, chain, end.si,
+        scene, ray, medium, rays, chain, hit,
         [&](const Medium* m, const Ray& r, float tmax, FlightRecord* record) {
             if (!m) return true;
             const HeroFreeFlight ff = flights.sample(*m, r, tmax, sampler, record);
@@ -112,9 +112,9 @@ inline ChainEnd sample_chain(const Scene& scene, const Ray& ray, const Medium* m
         break;
     case NullWalk::End::Surface:
         end.kind = ChainEnd::Kind::Surface;
-        end.si.t = w.travelled + end.si.t;
+        hit.t = w.travelled + hit.t;
         end.medium = w.medium;
-        end.distance = end.si.t;
+        end.distance = hit.t;
         break;
     default:
         break;
@@ -153,10 +153,13 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
     if (max_depth == 0) return L;
     const bool nee = !scene.emitters.empty();
     // The pieces of every chain, for re-evaluation on the moving geometry (the reference needs none).
-    thread_local LegChain chain_pieces, shadow_pieces;
-    LegChain* const chain = reference ? nullptr : &chain_pieces;
-    LegChain* const shadow = reference ? nullptr : &shadow_pieces;
+    LegChain *chain = nullptr, *shadow = nullptr;
+    if constexpr (!reference) {
+        thread_local LegChain chain_pieces, shadow_pieces;
+        chain = &chain_pieces, shadow = &shadow_pieces;
+    }
     float eta = 1.f;
+    float mean_ratio = flights.mean_ratio();
 
     for (unsigned depth = 0;;) { // depth: the scattering vertices before v
         // At the last scattering vertex a path goes on only through a null lobe.
@@ -180,7 +183,7 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
             ref.p = v.p0, ref.t = 0.f;
 
         // The path's estimate factor: the throughput f/p_hero over the mean density ratio.
-        const Color3<T> weight = throughput / T(flights.mean_ratio());
+        const Color3<T> weight = throughput / T(mean_ratio);
 
         // Next-event estimation (through media and null surfaces).
         const bool smooth = v.surface ? bsdf->has(BSDFSmooth) : v.medium->sample_emitters;
@@ -248,17 +251,19 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
         float q = 1.f;
         if (roulette) {
             const Color3f so_far(detach(throughput.x), detach(throughput.y), detach(throughput.z));
-            q = roulette_survival(so_far * sampled_weight, eta, flights.mean_ratio());
+            q = roulette_survival(so_far * sampled_weight, eta, mean_ratio);
             if (sampler.next_1d() >= q) break;
         }
 
+        // The chain to the next vertex; its hit lands in v.hit (v's own point is kept in here0).
         const Medium* medium = v.surface ? target_medium(*v.hit.shape, v.hit.n, d, v.medium) : v.medium;
-        Ray ray = v.surface ? v.hit.spawn_ray(d) : Ray(v.p0, d);
+        const Ray ray = v.surface ? v.hit.spawn_ray(d) : Ray(v.p0, d);
+        const Vec3f here0 = v.surface ? v.hit.p : v.p0;
         ++rays.rays;
         Color3f flight;
-        const ChainEnd end = sample_chain(scene, ray, medium, flights, sampler, chain, flight, rays);
+        const ChainEnd end = sample_chain(scene, ray, medium, flights, sampler, chain, v.hit, flight, rays);
         if (end.kind == ChainEnd::Kind::Absorbed) break;
-        const float mean_ratio = flights.mean_ratio();
+        mean_ratio = flights.mean_ratio();
 
         // The next vertex in T (its moving interaction next_si and position x) and the step's factor
         // f/p_σ · chain weight · G J / G0.
@@ -268,17 +273,17 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
         if constexpr (reference) {
             step = sampled_weight * flight;
             // A surface vertex keeps its hit: its wi is already -d, the direction of the chain's last ray.
-            x = end.kind == ChainEnd::Kind::Surface ? end.si.p : end.p;
+            x = end.kind == ChainEnd::Kind::Surface ? v.hit.p : end.p;
         } else {
             T measure(1.f);
             if (end.kind == ChainEnd::Kind::Surface) {
-                next_si = geometry.vertex(end.si);
+                next_si = geometry.vertex(v.hit);
                 x = next_si.p;
                 const Vec3<T> to = x - v.p;
                 const T dist2 = squared_norm(to);
                 const Vec3<T> w = to / sqrt(dist2);
                 next_si.wi = next_si.to_local(-w);
-                measure = relative_change(abs(dot(next_si.n, w)) / dist2 * geometry.jacobian(end.si));
+                measure = relative_change(abs(dot(next_si.n, w)) / dist2 * geometry.jacobian(v.hit));
             } else if (end.kind == ChainEnd::Kind::Medium) {
                 T jacobian;
                 x = geometry.medium_vertex(end.p, end.medium, jacobian);
@@ -296,7 +301,7 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
         // Emission found at the end (a surface or the environment), weighted against emitter sampling.
         if (end.kind != ChainEnd::Kind::Medium) {
             for_each_emitter_hit(
-                scene, ref, d, end.si, [&](const Emitter* e, const Color3f& Le, float em_pdf) {
+                scene, ref, d, v.hit, [&](const Emitter* e, const Color3f& Le, float em_pdf) {
                     const float w = (delta || !smooth) ? 1.f : mis_power(dir_pdf, em_pdf);
                     if constexpr (reference) {
                         L += throughput * step * Le * (w / mean_ratio / q);
@@ -314,11 +319,10 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
         if (roulette) throughput /= T(q);
 
         prev = v.p;
-        prev0 = v.surface ? v.hit.p : v.p0;
+        prev0 = here0;
         v.surface = end.kind == ChainEnd::Kind::Surface;
-        v.hit = end.si;
         if constexpr (!reference) v.si = next_si;
-        v.p0 = v.surface ? end.si.p : end.p;
+        v.p0 = v.surface ? v.hit.p : end.p;
         v.p = x;
         v.medium = end.medium;
         if (!null) ++depth;
@@ -333,23 +337,22 @@ inline Color3f trace_volpath(const Scene& scene, Sampler& sampler, const Ray& pr
                              const PathSettings& settings, SpectralMIS spectral, RayCounter& rays) {
     if (settings.max_depth == 0) return Color3f(0.f);
     SpectralFlights flights{spectral};
+    VolVertex<float> x1;
     Color3f flight;
     const ChainEnd end =
-        sample_chain(scene, primary, sensor_medium(scene), flights, sampler, nullptr, flight, rays);
+        sample_chain(scene, primary, sensor_medium(scene), flights, sampler, nullptr, x1.hit, flight, rays);
     if (end.kind == ChainEnd::Kind::Absorbed) return Color3f(0.f);
     Color3f L(0.f);
     if (end.kind != ChainEnd::Kind::Medium && !settings.hide_emitters) {
         Interaction3f camera;
         camera.p = primary.o;
-        for_each_emitter_hit(scene, camera, primary.d, end.si,
+        for_each_emitter_hit(scene, camera, primary.d, x1.hit,
                              [&](const Emitter*, const Color3f& Le, float) { L += Le; });
     }
     L *= flight / flights.mean_ratio();
     if (end.kind == ChainEnd::Kind::Escaped) return L;
-    VolVertex<float> x1;
     x1.surface = end.kind == ChainEnd::Kind::Surface;
-    x1.hit = end.si;
-    x1.p0 = x1.p = x1.surface ? end.si.p : end.p;
+    x1.p0 = x1.p = x1.surface ? x1.hit.p : end.p;
     x1.medium = end.medium;
     return L + trace_volpath_from<float>(scene, sampler, x1, primary.o, primary.o, flights,
                                          ReferenceGeometry{}, settings, rays, flight);
