@@ -6,8 +6,8 @@
 // coincident surfaces). With a LegChain the walk records every piece and the surface that bounds it, for
 // re-evaluation on a moving geometry (render/flight_record.h).
 //
-// The callers differ in what NullWalkRule keeps, each to the ray: psdr's deterministic sample budget counts
-// the rays, so the moment a ray is counted is part of the result.
+// NullWalkRule names how the callers differ, kept to the ray: psdr's deterministic sample budget counts the
+// rays, so when a ray is counted is part of the result.
 #pragma once
 #include "render/flight_record.h"
 #include "render/integrator.h"
