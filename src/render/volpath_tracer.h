@@ -130,18 +130,20 @@ template <typename T> struct VolVertex {
     SurfaceInteraction<T> si; // T = Var (the reference reads hit)
     Vec3f p0;
     Vec3<T> p;
+    Vec3f
+        wi0; // medium vertex: the world direction it was reached from, reversed (toward the previous vertex)
     const Medium* medium =
         nullptr; // medium vertex: its medium; surface vertex: the side the path arrived from
 };
 
-// Radiance leaving the vertex x1 toward the previous vertex (the camera) at `prev` (moving; `prev0` in the
-// reference), estimated along one sampled path: emission found at later vertices, next-event estimation at
-// every vertex, and the material-form factors of every later step. x1's own factors (its emission, the camera
-// and the first chain) are the caller's; `throughput` (float renders: the first chain's weight) only steers
-// Russian roulette and scales the estimate. For a surface vertex x1.si.wi must be set (T = Var). `flights`
-// carries the path's spectral MIS state after the first chain.
+// Radiance leaving the vertex x1 toward the previous vertex (the camera) at `prev` (moving), estimated along
+// one sampled path: emission found at later vertices, next-event estimation at every vertex, and the
+// material-form factors of every later step. x1's own factors (its emission, the camera and the first chain)
+// are the caller's; `throughput` (float renders: the first chain's weight) only steers Russian roulette and
+// scales the estimate. For a surface vertex x1.si.wi must be set (T = Var), for a medium vertex x1.wi0.
+// `flights` carries the path's spectral MIS state after the first chain.
 template <typename T, typename Geometry>
-Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> v, Vec3<T> prev, Vec3f prev0,
+Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> v, Vec3<T> prev,
                              SpectralFlights flights, const Geometry& geometry, const PathSettings& settings,
                              RayCounter& rays, Color3<T> throughput = Color3<T>(T(1))) {
     using std::abs;
@@ -169,7 +171,6 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
 
         // The vertex's scattering function toward a world direction, on the tape (the reference evaluates
         // none: its factors are the sampler's), and its float value and density for MIS.
-        const Vec3f wi0 = v.surface ? Vec3f(0.f) : normalize(prev0 - v.p0);
         const Vec3<T> wi = reference ? Vec3<T>(T(0)) : normalize(prev - v.p);
         if (v.surface && !bsdf) break;
         const auto f_of = [&](const Vec3<T>& wo) -> Color3<T> {
@@ -196,7 +197,7 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
                     const Vec3f local = v.hit.to_local(ds.d);
                     f0 = bsdf->eval(ctx, v.hit, local), pdf = bsdf->pdf(ctx, v.hit, local);
                 } else {
-                    pdf = v.medium->phase->pdf(wi0, ds.d), f0 = Color3f(pdf);
+                    pdf = v.medium->phase->pdf(v.wi0, ds.d), f0 = Color3f(pdf);
                 }
                 const Ray shadow_ray = std::isinf(ds.dist) ? ref.spawn_ray(ds.d) : ref.spawn_ray_to(ds.p);
                 const Medium* shadow_medium =
@@ -226,10 +227,9 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
         float dir_pdf;
         bool delta = false, null = false;
         Color3f sampled_weight(1.f); // f/p in the reference configuration
-        const float u1 = sampler.next_1d();
-        const Vec2f u2 = sampler.next_2d();
         if (v.surface) {
-            const auto [bs, bsdf_weight] = bsdf->sample(ctx, v.hit, u1, u2);
+            const float u1 = sampler.next_1d();
+            const auto [bs, bsdf_weight] = bsdf->sample(ctx, v.hit, u1, sampler.next_2d());
             if (is_black(bsdf_weight)) break;
             null = bs.sampled_type == BSDFNull;
             if (last && !null) break;
@@ -239,7 +239,7 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
             sampled_weight = bsdf_weight;
             eta *= bs.eta;
         } else {
-            const auto [wo, pdf] = v.medium->phase->sample(wi0, u2);
+            const auto [wo, pdf] = v.medium->phase->sample(v.wi0, sampler.next_2d());
             if (!(pdf > 0.f)) break;
             d = wo;
             dir_pdf = pdf;
@@ -255,10 +255,9 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
             if (sampler.next_1d() >= q) break;
         }
 
-        // The chain to the next vertex; its hit lands in v.hit (v's own point is kept in here0).
+        // The chain to the next vertex; its hit lands in v.hit.
         const Medium* medium = v.surface ? target_medium(*v.hit.shape, v.hit.n, d, v.medium) : v.medium;
         const Ray ray = v.surface ? v.hit.spawn_ray(d) : Ray(v.p0, d);
-        const Vec3f here0 = v.surface ? v.hit.p : v.p0;
         ++rays.rays;
         Color3f flight;
         const ChainEnd end = sample_chain(scene, ray, medium, flights, sampler, chain, v.hit, flight, rays);
@@ -319,11 +318,11 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
         if (roulette) throughput /= T(q);
 
         prev = v.p;
-        prev0 = here0;
         v.surface = end.kind == ChainEnd::Kind::Surface;
         if constexpr (!reference) v.si = next_si;
         v.p0 = v.surface ? v.hit.p : end.p;
         v.p = x;
+        v.wi0 = -d;
         v.medium = end.medium;
         if (!null) ++depth;
     }
@@ -353,9 +352,10 @@ inline Color3f trace_volpath(const Scene& scene, Sampler& sampler, const Ray& pr
     if (end.kind == ChainEnd::Kind::Escaped) return L;
     x1.surface = end.kind == ChainEnd::Kind::Surface;
     x1.p0 = x1.p = x1.surface ? x1.hit.p : end.p;
+    x1.wi0 = -primary.d;
     x1.medium = end.medium;
-    return L + trace_volpath_from<float>(scene, sampler, x1, primary.o, primary.o, flights,
-                                         ReferenceGeometry{}, settings, rays, flight);
+    return L + trace_volpath_from<float>(scene, sampler, x1, primary.o, flights, ReferenceGeometry{},
+                                         settings, rays, flight);
 }
 
 } // namespace penumbra

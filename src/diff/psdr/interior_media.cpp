@@ -30,6 +30,7 @@ Color3<Var> volumetric_camera_path(const Scene& scene, const MaterialForm& form,
     // The first vertex and its camera factor.
     x1.surface = end.kind == ChainEnd::Kind::Surface;
     x1.medium = end.medium;
+    x1.wi0 = -ray.d;
     Var factor(1.f);
     if (x1.surface) {
         Ray camera_ray = ray;
@@ -68,7 +69,7 @@ Color3<Var> volumetric_camera_path(const Scene& scene, const MaterialForm& form,
     if (x1.surface && !settings.hide_emitters)
         if (const Emitter* e = x1.hit.emitter()) L += e->eval(x1.si) / Var(mean_ratio);
     if (settings.max_depth != 1)
-        L += trace_volpath_from<Var>(scene, sampler, x1, o, o0, flights, form, settings, rays);
+        L += trace_volpath_from<Var>(scene, sampler, x1, o, flights, form, settings, rays);
     return L * along * Color3<Var>(ray_weight) * factor;
 }
 
