@@ -1,11 +1,11 @@
-// The interior term with participating media (paper 001 §5.1; src/render/volpath_material.h) against central
+// The interior term with participating media (paper 001 §5.1; src/render/volpath_tracer.h) against central
 // finite differences of the volpath renderer: derivatives w.r.t. σt, albedo and the HG g of a homogeneous and
 // of a heterogeneous medium (its scale and its grid's voxels, `<volume>.data`) (through the free-flight and ratio-tracking re-evaluations of
 // render/flight_record.h), and a surface parameter seen through a medium; forward and reverse mode adjoint;
 // the float instantiation of the estimator agrees with the renderer.
 #include "diff_check.h"
 #include "media_test_util.h"
-#include "render/volpath_material.h"
+#include "render/volpath_tracer.h"
 #include "render_stats.h"
 #include "xml_test_util.h"
 

@@ -1,7 +1,7 @@
 #include "diff/media_radiance.h"
 
 #include "diff/media_walk.h"
-#include "render/volpath_material.h"
+#include "render/volpath_tracer.h"
 
 namespace penumbra {
 
@@ -10,20 +10,19 @@ Color3f vertex_radiance(const Scene& scene, const RadianceVertex& start, int max
     Color3f L(0.f);
     const bool surface = start.si.is_valid();
     if (emission && surface && start.si.emitter()) L += start.si.emitter()->eval(start.si);
-    // The rest of the path: render/volpath_material.h on the reference geometry, its own hero channel drawn here
-    // (the flights that reached the vertex were weighted by the caller).
+    // The rest of the path: render/volpath_tracer.h on the reference geometry, its own hero channel drawn
+    // here (the flights that reached the vertex were weighted by the caller).
     VolVertex<float> v;
     v.surface = surface;
     v.hit = start.si;
-    v.si = start.si;
     v.p0 = v.p = start.si.p;
+    v.wi0 = start.to_viewer;
     v.medium = start.medium;
     const Vec3f prev = start.si.p + start.to_viewer;
-    const int hero = std::min(int(sampler.next_1d() * 3.f), 2);
+    const SpectralFlights flights{SpectralMIS::PerPath, sample_hero_channel(sampler)};
     PathSettings rest = settings;
     rest.max_depth = max_depth;
-    return L + trace_volpath_from<float>(scene, sampler, v, prev, prev, hero, Color3f(1.f), ReferenceGeometry{}, rest,
-                                         rays);
+    return L + trace_volpath_from<float>(scene, sampler, v, prev, flights, ReferenceGeometry{}, rest, rays);
 }
 
 ArrivingRadiance arriving_radiance(const Scene& scene, const Ray& ray, const Medium* medium,

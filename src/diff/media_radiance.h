@@ -1,7 +1,7 @@
 // Radiance leaving a vertex of a boundary path through participating media: the source subpath of Algorithm 1
 // (paper 001 §5.2, line 16) from a surface or medium vertex x_S0, the radiance seen beyond a silhouette's edge
 // (the primary term) and through a pixel's edge (the pixel-boundary term): the volumetric path tracer of
-// render/volpath_material.h on the reference geometry, started at the vertex.
+// render/volpath_tracer.h on the reference geometry, started at the vertex.
 #pragma once
 #include "diff/media_walk.h"
 #include "render/path_tracer.h"

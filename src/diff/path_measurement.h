@@ -12,7 +12,7 @@
 // connections; crossings of null surfaces slide along the moving segment). The camera factor of z_1 is the
 // caller's (image-space or material-form first vertex, diff/psdr/interior_media.h). Constant factors (sampling
 // densities, the scattering functions of delta lobes) are left out: the estimator uses f(x̄; θ) / f(x̄; θ0).
-// After a delta lobe the next vertex follows its direction: as in render/volpath_material.h, that segment's
+// After a delta lobe the next vertex follows its direction: as in render/volpath_tracer.h, that segment's
 // G' and the vertex's J are left out.
 #pragma once
 #include "core/var.h"

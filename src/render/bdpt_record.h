@@ -4,7 +4,7 @@
 // (BDPTContext::record is null), so its results and speed are unchanged.
 #pragma once
 #include "render/path_vertex.h"
-#include "render/volpath_material.h"
+#include "render/flight_record.h"
 
 #include <vector>
 

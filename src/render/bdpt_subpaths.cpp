@@ -5,6 +5,7 @@
 #include "render/bdpt_record.h"
 #include "render/light_medium.h"
 #include "render/medium_sampling.h"
+#include "render/null_walk.h"
 #include "render/volume_visibility.h"
 
 #include <cmath>
@@ -42,11 +43,6 @@ std::pair<float, float> segment_free_flight(const std::vector<Piece>& pieces, bo
     return {fwd, rev};
 }
 
-bool crosses(const SurfaceInteraction3f& hit) {
-    const BSDF* bsdf = hit.bsdf();
-    return bsdf && bsdf->flags() == BSDFNull;
-}
-
 // Extends `path` from its last vertex along `ray` (sampled with solid-angle density pdf_dir, or the disk
 // density from an infinite light), in `medium`, with throughput beta (pbrt-v3's RandomWalk with media).
 void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, float pdf_dir,
@@ -61,40 +57,35 @@ void random_walk(BDPTContext& ctx, Ray ray, const Medium* medium, Color3f beta, 
     while (path.size() < max_vertices) {
         // Follow the ray to the next vertex, through null surfaces, sampling free flights.
         pieces.clear();
-        SurfaceInteraction3f hit;
-        bool scattered = false;
+        bool scattered = false, absorbed = false;
         Vec3f scatter_p;
         LegChain* chain = nullptr;
         if (chains) {
             if (chains->size() <= path.size()) chains->resize(path.size() + 1);
             chain = &(*chains)[path.size()];
-            chain->clear();
         }
-        float travelled = 0.f;
-        for (int crossing = 0;; ++crossing) {
-            ++ctx.rays.rays;
-            hit = c.scene.intersect(ray);
-            const float tmax = hit.is_valid() ? hit.t : Infinity;
-            LegPiece* piece = chain ? &chain->add(medium, travelled) : nullptr;
-            if (piece) piece->bound = hit;
-            if (medium) {
-                const FreeFlightSample ff = sample_free_flight(*medium, ray.o, ray.d, tmax, ctx.sampler,
-                                                               piece ? &piece->record : nullptr);
-                beta *= ff.weight;
-                if (ff.event == FreeFlightSample::Event::Absorbed || is_black(beta)) return;
-                if (ff.event == FreeFlightSample::Event::Scattered) {
-                    pieces.push_back({medium, ray.o, ray.d, ff.t});
-                    scattered = true;
-                    scatter_p = ff.p;
-                    break;
+        SurfaceInteraction3f hit;
+        const NullWalk w = walk_null_surfaces<NullWalkRule{.hit_after_bound_ends = true}>(
+            c.scene, ray, medium, ctx.rays, chain, hit,
+            [&](const Medium* m, const Ray& r, float tmax, FlightRecord* record) {
+                if (m) {
+                    const FreeFlightSample ff = sample_free_flight(*m, r.o, r.d, tmax, ctx.sampler, record);
+                    beta *= ff.weight;
+                    absorbed = ff.event == FreeFlightSample::Event::Absorbed || is_black(beta);
+                    if (absorbed) return false;
+                    if (ff.event == FreeFlightSample::Event::Scattered) {
+                        pieces.push_back({m, r.o, r.d, ff.t});
+                        scattered = true;
+                        scatter_p = ff.p;
+                        return false;
+                    }
                 }
-            }
-            pieces.push_back({medium, ray.o, ray.d, tmax});
-            if (!hit.is_valid() || !crosses(hit) || crossing >= 256) break;
-            medium = target_medium(*hit.shape, hit.n, ray.d, medium);
-            travelled += hit.t;
-            ray = hit.spawn_ray(ray.d);
-        }
+                pieces.push_back({m, r.o, r.d, tmax});
+                return true;
+            });
+        if (absorbed) return;
+        medium = w.medium;
+        ray = w.ray;
         const size_t prev_index = path.size() - 1;
         PathVertex v;
         v.medium = medium;
@@ -263,17 +254,13 @@ std::pair<float, float> connection_free_flight(BDPTContext& ctx, const PathVerte
     if (!ctx.has_media) return {1.f, 1.f};
     thread_local std::vector<Piece> pieces;
     pieces.clear();
-    Ray ray = ray_between(a, b.p);
-    for (int crossing = 0; crossing < 256; ++crossing) {
-        ++ctx.rays.rays;
-        const SurfaceInteraction3f hit = ctx.scene.intersect(ray);
-        const float end = hit.is_valid() ? hit.t : ray.tmax;
-        pieces.push_back({medium, ray.o, ray.d, end});
-        if (!hit.is_valid() || !crosses(hit)) break;
-        medium = target_medium(*hit.shape, hit.n, ray.d, medium);
-        ray = ray_beyond(ray, hit);
-        if (!(ray.tmax > 0.f)) break;
-    }
+    SurfaceInteraction3f hit;
+    walk_null_surfaces<NullWalkRule{.bounded = true}>(
+        ctx.scene, ray_between(a, b.p), medium, ctx.rays, nullptr, hit,
+        [&](const Medium* m, const Ray& r, float end, FlightRecord*) {
+            pieces.push_back({m, r.o, r.d, end});
+            return true;
+        });
     return segment_free_flight(pieces, a.type == VertexType::Medium, b.type == VertexType::Medium);
 }
 

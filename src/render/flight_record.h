@@ -9,9 +9,12 @@
 //   delta tracking    Tr(θ) σs(x(θ)) / p ≈ Π_j (μ − σt(y_j) ℓ/ℓ0) / (μ P_null,j) · σs(x) / (μ P_real)
 // (the null-collision form of Miller et al. 2019 with detached event probabilities P); at θ0 these are the
 // weights the samplers use. Homogeneous media keep the closed forms exp(−σt ℓ(θ)) over the detached density.
-// The change of measure of the vertex itself, ℓ0²/ℓ² · J, is the caller's.
+// The change of measure of the vertex itself, ℓ0²/ℓ² · J, is the caller's. A leg that crosses index-matched
+// surfaces is a chain of such pieces (LegChain, recorded by render/null_walk.h).
 #pragma once
+#include "scene/interaction.h"
 #include "scene/medium.h"
+#include "scene/shape.h"
 
 #include <vector>
 
@@ -36,6 +39,31 @@ struct FlightRecord {
         real_probability = 1.f;
         collisions.clear();
     }
+};
+
+// One straight piece of a chain of legs through null surfaces: travelled in `medium` (null: vacuum) and
+// ending at `bound`, the surface its ray met (invalid: none), which is crossed unless it is the chain's end.
+struct LegPiece {
+    const Medium* medium = nullptr;
+    SurfaceInteraction3f bound;
+    float start = 0.f; // reference distance of the piece's start from the chain's start
+    FlightRecord record;
+};
+
+// The pieces of one chain (kept across steps to reuse their storage).
+struct LegChain {
+    std::vector<LegPiece> pieces;
+    int count = 0;
+
+    LegPiece& add(const Medium* medium, float start) {
+        if (count == int(pieces.size())) pieces.emplace_back();
+        LegPiece& p = pieces[size_t(count++)];
+        p.medium = medium;
+        p.bound = SurfaceInteraction3f();
+        p.start = start;
+        return p;
+    }
+    void clear() { count = 0; }
 };
 
 namespace flight_detail {
@@ -84,6 +112,41 @@ Color3<T> transmittance_weight(const Medium& medium, const FlightRecord& r, cons
         tr *= (Color3<T>(T(1)) - medium.sigma_t(y) * (stretch / T(c.majorant))) / T(c.probability);
     }
     return tr;
+}
+
+// Where the line through a and b meets the plane of the moving triangle of `hit` (a crossing of a null
+// surface, which is not a path vertex: it slides along the moving segment).
+template <typename T, typename Geometry>
+Vec3<T> crossing_point(const Geometry& geometry, const SurfaceInteraction3f& hit, const Vec3<T>& a,
+                       const Vec3<T>& b) {
+    const uint32_t* i = &hit.shape->mesh.indices[3 * size_t(hit.prim_index)];
+    const Vec3<T> q0 = geometry.position(*hit.shape, i[0]);
+    const Vec3<T> n =
+        cross(geometry.position(*hit.shape, i[1]) - q0, geometry.position(*hit.shape, i[2]) - q0);
+    const Vec3<T> ab = b - a;
+    return a + ab * (dot(n, q0 - a) / dot(n, ab));
+}
+
+// The weight of a chain on the moving segment a → b: free-flight weights (`free_flight`, the last piece
+// scattering at b when `scattered`) or transmittance estimates, piece by piece between the crossings. With
+// `to_infinity` b only gives the direction and the last piece (vacuum, or a medium that is empty there)
+// contributes 1.
+template <typename T, typename Geometry>
+Color3<T> chain_weight(const LegChain& chain, const Vec3<T>& a, const Vec3<T>& b, bool free_flight,
+                       bool scattered, bool to_infinity, const Geometry& geometry) {
+    Color3<T> w(T(1));
+    Vec3<T> start = a;
+    for (int k = 0; k < chain.count; ++k) {
+        const LegPiece& piece = chain.pieces[size_t(k)];
+        const bool last = k + 1 == chain.count;
+        if (last && to_infinity) break;
+        const Vec3<T> end = last ? b : crossing_point(geometry, piece.bound, a, b);
+        if (piece.medium)
+            w *= free_flight ? flight_weight(*piece.medium, piece.record, last && scattered, start, end)
+                             : transmittance_weight(*piece.medium, piece.record, start, end);
+        start = end;
+    }
+    return w;
 }
 
 } // namespace penumbra

@@ -1,5 +1,6 @@
 #include "render/light_medium.h"
 
+#include "render/null_walk.h"
 #include "render/volume_visibility.h"
 
 namespace penumbra {
@@ -19,17 +20,11 @@ const Medium* medium_at(const Scene& scene, const Vec3f& x, RayCounter& rays) {
     const Vec3f to_x = x - o;
     const float dist = norm(to_x);
     if (!(dist > 0.f)) return medium;
-    Ray ray(o, to_x / dist, dist);
-    // A bound on the surfaces crossed guards against rays stuck on coincident surfaces.
-    for (int crossing = 0; crossing < 256; ++crossing) {
-        ++rays.rays;
-        const SurfaceInteraction3f si = scene.intersect(ray);
-        if (!si.is_valid()) break;
-        medium = target_medium(*si.shape, si.n, ray.d, medium);
-        ray = ray_beyond(ray, si);
-        if (!(ray.tmax > 0.f)) break;
-    }
-    return medium;
+    constexpr NullWalkRule every_surface{.every_surface = true, .bounded = true};
+    SurfaceInteraction3f hit;
+    return walk_null_surfaces<every_surface>(scene, Ray(o, to_x / dist, dist), medium, rays, nullptr, hit,
+                                             no_segment_action)
+        .medium;
 }
 
 const Medium* emitter_medium(const Scene& scene, const Emitter& emitter, const Vec3f& origin,

@@ -26,11 +26,14 @@ template <typename T> inline T relative_change(const T& v) {
 
 // Russian roulette, detached (Mitsuba 3: survival probability min(max(throughput / scale)·eta², 0.95)): false
 // when the path ends, else the throughput is divided by the survival probability. `scale` is the estimate's
-// own factor that the rule should not see (volpath_material.h's mean free-flight ratio; 1 otherwise).
+// own factor that the rule should not see (volpath_tracer.h's mean free-flight ratio; 1 otherwise).
+inline float roulette_survival(const Color3f& throughput, float eta, float scale = 1.f) {
+    return std::min(max_component(throughput / scale) * eta * eta, 0.95f);
+}
 template <typename T>
 bool survives_roulette(Color3<T>& throughput, float eta, Sampler& sampler, float scale = 1.f) {
-    const Color3f t = Color3f(detach(throughput.x), detach(throughput.y), detach(throughput.z)) / scale;
-    const float q = std::min(max_component(t) * eta * eta, 0.95f);
+    const float q =
+        roulette_survival(Color3f(detach(throughput.x), detach(throughput.y), detach(throughput.z)), eta, scale);
     if (sampler.next_1d() >= q) return false;
     throughput /= T(q);
     return true;

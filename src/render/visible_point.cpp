@@ -1,6 +1,7 @@
 #include "render/visible_point.h"
 
 #include "render/medium_sampling.h"
+#include "render/null_walk.h"
 #include "render/volume_visibility.h"
 
 #include <algorithm>
@@ -17,27 +18,41 @@ VisiblePoint trace_visible_point(const Scene& scene, Sampler& sampler, Ray ray, 
     const int max_depth = settings.max_depth < 0 ? std::numeric_limits<int>::max() : settings.max_depth;
     float eta = 1.f;
     const Medium* medium = sensor_medium(scene);
-    for (int depth = 1, crossings = 0; depth <= max_depth && crossings < 256; ++crossings) {
-        ++rays.rays;
-        const SurfaceInteraction3f si = scene.intersect(ray);
-        // Free flight through the current medium up to the surface: a scattering event is the visible point.
-        if (medium) {
-            const FreeFlightSample ff =
-                sample_free_flight(*medium, ray.o, ray.d, si.is_valid() ? si.t : Infinity, sampler);
-            if (ff.event == FreeFlightSample::Event::Absorbed) return {};
-            beta *= ff.weight;
-            if (ff.event == FreeFlightSample::Event::Scattered) {
-                if (depth + 1 > max_depth) return {};
-                const Color3f sigma_s = medium->sigma_t(ff.p) * medium->albedo(ff.p);
-                VisiblePoint vp;
-                vp.beta = Color3f(sigma_s.x > 0.f ? beta.x / sigma_s.x : 0.f, sigma_s.y > 0.f ? beta.y / sigma_s.y : 0.f,
-                                  sigma_s.z > 0.f ? beta.z / sigma_s.z : 0.f);
-                vp.depth = depth;
-                vp.medium = medium;
-                vp.p = ff.p;
-                vp.wi = -ray.d;
-                return vp;
-            }
+    // `bounces` bounds the specular chain as the null walk bounds its crossings.
+    for (int depth = 1, bounces = 0; depth <= max_depth && bounces < MaxNullCrossings; ++bounces) {
+        // To the next event through pure null surfaces, with free flights in the media on the way: a
+        // scattering event is the visible point.
+        SurfaceInteraction3f si;
+        bool absorbed = false, scattered = false;
+        Vec3f scatter_p;
+        const NullWalk w =
+            walk_null_surfaces<NullWalkRule{}>(scene, ray, medium, rays, nullptr, si,
+                                               [&](const Medium* m, const Ray& r, float end, FlightRecord*) {
+                                                   if (!m) return true;
+                                                   const FreeFlightSample ff =
+                                                       sample_free_flight(*m, r.o, r.d, end, sampler);
+                                                   absorbed = ff.event == FreeFlightSample::Event::Absorbed;
+                                                   if (absorbed) return false;
+                                                   beta *= ff.weight;
+                                                   scattered = ff.event == FreeFlightSample::Event::Scattered;
+                                                   scatter_p = ff.p;
+                                                   return !scattered;
+                                               });
+        if (absorbed || w.end == NullWalk::End::Exhausted) return {};
+        medium = w.medium;
+        ray = w.ray;
+        if (scattered) {
+            if (depth + 1 > max_depth) return {};
+            const Color3f sigma_s = medium->sigma_t(scatter_p) * medium->albedo(scatter_p);
+            VisiblePoint vp;
+            vp.beta = Color3f(sigma_s.x > 0.f ? beta.x / sigma_s.x : 0.f,
+                              sigma_s.y > 0.f ? beta.y / sigma_s.y : 0.f,
+                              sigma_s.z > 0.f ? beta.z / sigma_s.z : 0.f);
+            vp.depth = depth;
+            vp.medium = medium;
+            vp.p = scatter_p;
+            vp.wi = -ray.d;
+            return vp;
         }
         if (!si.is_valid()) {
             emission += beta * scene.eval_environment(ray.d);
@@ -77,8 +92,8 @@ VisiblePoint trace_visible_point(const Scene& scene, Sampler& sampler, Ray ray, 
 }
 
 PixelVisiblePoint trace_pixel_visible_point(const Scene& scene, Sampler& sampler, int x, int y, uint64_t seed,
-                                            uint64_t pass, const EyeSubpathSettings& settings, RayCounter& rays,
-                                            std::vector<SpecularVertex>* chain) {
+                                            uint64_t pass, const EyeSubpathSettings& settings,
+                                            RayCounter& rays, std::vector<SpecularVertex>* chain) {
     const Sensor& sensor = *scene.sensor;
     const Film& film = *sensor.film;
     sampler.start(seed, uint64_t(y) * uint64_t(film.width) + uint64_t(x), pass);

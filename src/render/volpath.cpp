@@ -20,7 +20,7 @@ namespace penumbra {
 
 void VolPathIntegrator::sample(const Scene& scene, Sampler& sampler, const Ray& primary, Color3f* out,
                                RayCounter& rays) const {
-    out[0] = trace_volpath<float>(scene, sampler, primary, settings_, spectral_, rays);
+    out[0] = trace_volpath(scene, sampler, primary, settings_, spectral_, rays);
 }
 
 } // namespace penumbra

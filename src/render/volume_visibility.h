@@ -7,47 +7,16 @@
 #include "render/integrator.h"
 #include "scene/scene.h"
 
-#include <vector>
-
 namespace penumbra {
-
-// One straight piece of a chain of legs through null surfaces: travelled in `medium` (null: vacuum) and
-// ending at `bound`, the surface its ray met (invalid: none), which is crossed unless it is the chain's end.
-struct LegPiece {
-    const Medium* medium = nullptr;
-    SurfaceInteraction3f bound;
-    float start = 0.f; // reference distance of the piece's start from the chain's start
-    FlightRecord record;
-};
-
-// The pieces of one chain (kept across steps to reuse their storage).
-struct LegChain {
-    std::vector<LegPiece> pieces;
-    int count = 0;
-
-    LegPiece& add(const Medium* medium, float start) {
-        if (count == int(pieces.size())) pieces.emplace_back();
-        LegPiece& p = pieces[size_t(count++)];
-        p.medium = medium;
-        p.bound = SurfaceInteraction3f();
-        p.start = start;
-        return p;
-    }
-    void clear() { count = 0; }
-};
 
 // Transmittance along `ray` (unit direction) over [0, ray.tmax) for a ray starting in `medium` (null:
 // vacuum). Zero if an opaque surface lies on the segment. Transmittance inside heterogeneous media is an
 // unbiased estimate (ratio tracking). Counts the rays it traces. `end_medium` (optional) receives the medium
 // at the segment's end; `pieces` (optional) the segment's pieces between crossings with their ratio-tracking
-// records, for re-evaluation on a moving segment (render/volpath_material.h chain_weight).
+// records, for re-evaluation on a moving segment (render/flight_record.h chain_weight).
 Color3f segment_transmittance(const Scene& scene, Ray ray, const Medium* medium, Sampler& sampler,
                               RayCounter& rays, const Medium** end_medium = nullptr,
                               LegChain* pieces = nullptr);
-
-// The rest of `ray` beyond its surface hit `si`: offset off the surface, tmax shortened by the distance
-// covered (not positive when nothing is left).
-Ray ray_beyond(const Ray& ray, const SurfaceInteraction3f& si);
 
 // The medium a sensor's rays start in.
 inline const Medium* sensor_medium(const Scene& scene) { return scene.sensor->medium.get(); }

@@ -1,6 +1,6 @@
 #include "diff/psdr/interior_media.h"
 
-#include "render/volpath_material.h"
+#include "render/volpath_tracer.h"
 
 namespace penumbra {
 
@@ -11,11 +11,12 @@ Color3<Var> volumetric_camera_path(const Scene& scene, const MaterialForm& form,
     const bool image = form.image_space_first_vertex();
     const Vec3f o0 = ray.o;
     const Vec3<Var> o = image ? Vec3<Var>(o0) : form.camera_position(o0);
-    Color3f flight, ratio(1.f);
-    const int hero = std::min(int(sampler.next_1d() * 3.f), 2);
+    Color3f flight;
+    SpectralFlights flights{SpectralMIS::PerPath, sample_hero_channel(sampler)};
+    VolVertex<Var> x1;
     const ChainEnd end =
-        sample_chain(scene, ray, sensor_medium(scene), hero, sampler, chain, flight, ratio, rays);
-    const float mean_ratio = (ratio.x + ratio.y + ratio.z) / 3.f;
+        sample_chain(scene, ray, sensor_medium(scene), flights, sampler, &chain, x1.hit, flight, rays);
+    const float mean_ratio = flights.mean_ratio();
     const Color3<Var> zero(Var(0.f));
     if (end.kind == ChainEnd::Kind::Absorbed || settings.max_depth == 0) return zero;
 
@@ -27,19 +28,18 @@ Color3<Var> volumetric_camera_path(const Scene& scene, const MaterialForm& form,
     }
 
     // The first vertex and its camera factor.
-    VolVertex<Var> x1;
     x1.surface = end.kind == ChainEnd::Kind::Surface;
-    x1.hit = end.si;
     x1.medium = end.medium;
+    x1.wi0 = -ray.d;
     Var factor(1.f);
     if (x1.surface) {
         Ray camera_ray = ray;
         camera_ray.tmax = Infinity;
-        x1.si = image ? form.ray_vertex(end.si, camera_ray) : form.vertex(end.si);
+        x1.si = image ? form.ray_vertex(x1.hit, camera_ray) : form.vertex(x1.hit);
         x1.p = x1.si.p;
-        x1.p0 = end.si.p;
+        x1.p0 = x1.hit.p;
         x1.si.wi = x1.si.to_local(normalize(o - x1.p));
-        if (!image) factor = camera(x1.p, x1.si.n, form.jacobian(end.si));
+        if (!image) factor = camera(x1.p, x1.si.n, form.jacobian(x1.hit));
     } else {
         x1.p0 = end.p;
         if (image) {
@@ -67,9 +67,9 @@ Color3<Var> volumetric_camera_path(const Scene& scene, const MaterialForm& form,
     const Color3<Var> along = chain_weight(chain, o, x1.p, true, medium_end, false, form);
     Color3<Var> L(Var(0.f));
     if (x1.surface && !settings.hide_emitters)
-        if (const Emitter* e = end.si.emitter()) L += e->eval(x1.si) / Var(mean_ratio);
+        if (const Emitter* e = x1.hit.emitter()) L += e->eval(x1.si) / Var(mean_ratio);
     if (settings.max_depth != 1)
-        L += trace_volpath_from<Var>(scene, sampler, x1, o, o0, hero, ratio, form, settings, rays);
+        L += trace_volpath_from<Var>(scene, sampler, x1, o, flights, form, settings, rays);
     return L * along * Color3<Var>(ray_weight) * factor;
 }
 

@@ -1,7 +1,7 @@
 // The camera's end of a volumetric path in the interior term (paper 001 §5.1 with media): the chain from the
 // camera through the sensor's medium and null surfaces to the first vertex x1 — a surface vertex, or a
 // medium vertex (a volume measure, Eqs. 22–23 with |ds/dω| / ℓ² in place of |ds/dA|) — then
-// render/volpath_material.h for the rest of the path.
+// render/volpath_tracer.h for the rest of the path.
 #pragma once
 #include "diff/material_form.h"
 #include "render/path_tracer.h"
