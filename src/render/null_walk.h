@@ -13,8 +13,6 @@
 #include "render/integrator.h"
 #include "scene/scene.h"
 
-#include <new>
-
 namespace penumbra {
 
 // A bound on the surfaces a walk crosses, against rays stuck on coincident surfaces.
@@ -68,7 +66,7 @@ NullWalk walk_null_surfaces(const Scene& scene, const Ray& ray, const Medium* me
     if (chain) chain->clear();
     for (int crossing = 0;; ++crossing) {
         if constexpr (!Rule.count_after_spawn) ++rays.rays;
-        new (&hit) SurfaceInteraction3f(scene.intersect(w.ray)); // made in place: no copy per crossing
+        hit = scene.intersect(w.ray);
         const float end = hit.is_valid() ? hit.t : (Rule.bounded ? w.ray.tmax : Infinity);
         LegPiece* piece = chain ? &chain->add(w.medium, w.travelled) : nullptr;
         if (piece) piece->bound = hit;
