@@ -105,6 +105,28 @@ struct WarRule {
     }
 };
 
+// The first vertex of a camera path that escapes: its direction ω warped on the sphere by the field
+// conditioned on the camera (the directions that escape form a region bounded by silhouettes, and the region
+// moves with them), seen at film position s(ω(θ)) with |ds/dω|(ω(θ)) (1 + ∇·V): the camera factor of the
+// material-form first vertex in solid angle, so that the divergence theorem of Eq. 34 closes across the
+// silhouettes that separate the environment from the surfaces (whose first vertices war_vertex warps).
+struct EscapedFirstVertex {
+    Vec3<Var> direction;
+    Vec2<Var> s;
+    Var jacobian;
+};
+bool escaped_first_vertex(const WarScene& c, const Ray& ray, AuxiliaryRng& rng, uint64_t& rays,
+                          EscapedFirstVertex& out) {
+    const WarpEstimate e = war_direction(c, Interaction3f{Infinity, ray.o, Vec3f(0.f)},
+                                         c.form.camera_position(ray.o), ray.d, rng, rays);
+    const Vec3<Var> d_cam = c.form.direction_to_reference_camera(e.direction);
+    Var film_jacobian;
+    if (!c.scene.sensor->film_position(Vec3<Var>(ray.o) + d_cam, -d_cam, out.s, film_jacobian)) return false;
+    out.direction = e.direction;
+    out.jacobian = film_jacobian * e.jacobian;
+    return true;
+}
+
 // One camera sample of pixel (px, py): the film position from the defensive filter mixture
 // (diff/film_sample.h), the first vertex p^D_1 warped conditioned on the camera, and the camera factor
 // P_j(s(x1(θ))) |ds/dA|(θ) J (1 + ∇·v) / (p_s |ds/dA|(θ0)) of the material-form first vertex (paper 001).
@@ -118,9 +140,11 @@ Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, AuxiliaryRng& r
     ++rays.rays;
     const SurfaceInteraction3f first = c.scene.intersect(ray);
     if (!first.is_valid()) {
-        const float w = film.filter_weight(px, py, center + fs.offset) / fs.pdf;
-        return c.settings.hide_emitters ? Color3<Var>(Var(0.f))
-                                        : c.form.environment(c.scene, ray.d) * Color3<Var>(ray_weight * w);
+        if (c.settings.hide_emitters) return Color3<Var>(Var(0.f));
+        EscapedFirstVertex x1;
+        if (!escaped_first_vertex(c.field, ray, rng, rays.rays, x1)) return Color3<Var>(Var(0.f));
+        const Var factor = film.filter_weight(px, py, x1.s) * relative_change(x1.jacobian) / Var(fs.pdf);
+        return c.form.environment(c.scene, ray.d, x1.direction) * Color3<Var>(ray_weight) * factor;
     }
     const WarNeighbor camera{Interaction3f{Infinity, ray.o, Vec3f(0.f)}, c.form.camera_position(ray.o)};
     WarVertex x1 = war_vertex(c.field, first, camera, rng, rays.rays);
@@ -139,16 +163,20 @@ Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, AuxiliaryRng& r
 // d/dθ s(X(p + (θ − θ0) v(p), θ)) of the reparameterized first vertex p seen through s (material motion,
 // moving camera and warp), for the flux −∮ P_j L (ṡ · n_out) over the edges where the filters jump
 // (diff/pixel_boundary.h): the divergence theorem of Eq. 34 at p_1 with a field that does not vanish where
-// s(p_1) crosses them. Zero for the environment seen directly (its film position does not move:
-// camera_sample). The auxiliary stream is the edge sample's own.
+// s(p_1) crosses them; for the environment seen directly, the film velocity of its warped direction
+// (escaped_first_vertex). The auxiliary stream is the edge sample's own.
 Var film_edge_velocity(const WarScene& c, uint64_t seed, const Vec2f& s, const Vec2f& across,
                        uint64_t stream, RayCounter& rays) {
     const Sensor& sensor = *c.scene.sensor;
     const Ray ray = sensor.sample_ray(s, Vec2f(0.5f)).first;
     ++rays.rays;
     const SurfaceInteraction3f first = c.scene.intersect(ray);
-    if (!first.is_valid()) return Var(0.f);
     AuxiliaryRng rng(seed ^ 0x5851F42D4C957F2DULL, stream, 0, WarSalt);
+    if (!first.is_valid()) {
+        EscapedFirstVertex x1;
+        if (!escaped_first_vertex(c, ray, rng, rays.rays, x1)) return Var(0.f);
+        return (x1.s.x - Var(s.x)) * Var(across.x) + (x1.s.y - Var(s.y)) * Var(across.y);
+    }
     const WarNeighbor camera{Interaction3f{Infinity, ray.o, Vec3f(0.f)}, c.form.camera_position(ray.o)};
     const WarVertex x1 = war_vertex(c, first, camera, rng, rays.rays);
     Vec2<Var> st;

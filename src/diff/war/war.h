@@ -3,7 +3,8 @@
 //   dI/dθ = ∫ ( d f̂(p̄)/dθ + Σ_{K=0}^{N−1} [∇·(f̂_K v_K)](p_K) ) dμ(p̄)
 // estimated by path tracing with next-event estimation in material form (paper 001), with no boundary
 // sampling. Path vertices are indexed from the light (x_0) to the camera (x_N); each vertex p_K but the
-// camera's carries the field v_K of diff/war/velocity_field.h conditioned on its detector-side neighbour p_{K+1}:
+// camera's carries the field v_K of diff/war/velocity_field.h conditioned on its detector-side
+// neighbour p_{K+1}:
 //   p^D_1 (first hit)   on the camera's position (primary visibility);
 //   p^D_{n+1}           on p^D_n (the vertex found by BSDF sampling, emitters included);
 //   p^S_n (NEE)         on p^D_n (the light point of next-event estimation).
@@ -14,16 +15,17 @@
 // the detector subpath's throughput: each vertex's warp is put on the tape once, when the vertex is sampled,
 // and every NEE path through it reuses it (the throughput's tangent is Σ^D_n × throughput). Forward mode
 // propagates the tangents once per path, reverse mode runs one adjoint pass per path: O(1) work per vertex
-// and per connection, whatever the path length. diff/war/velocity_field.h's war_vertex serves any path sampler (a
-// bidirectional one warps the source subpath's vertices conditioned on their detector-side neighbour too).
+// and per connection, whatever the path length. diff/war/velocity_field.h's war_vertex serves any path
+// sampler (a bidirectional one warps the source subpath's vertices conditioned on their detector-side
+// neighbour too).
 //
 // Not covered: delta lights (no integral to warp at the light: the motion of point, spot and directional
-// lights' shadows is missed, as in paper 004), vertices after a delta BSDF lobe (no area integral there),
-// and the environment seen directly through the film (its direction is not warped: the silhouettes of moving
-// objects against it are missed). Surfaces only. Where the pixel filters jump (a box filter's pixel edges,
-// any filter at the film's edge without sample_border) the first vertex's field does not vanish, and the
-// flux −∮ P_j L (ṡ · n_out) across those static film edges is added (diff/pixel_boundary.h), with ṡ the
-// film velocity of the reparameterized first vertex seen there.
+// lights' shadows is missed, as in paper 004) and vertices after a delta BSDF lobe (no area integral there).
+// The environment seen directly is a vertex at infinity warped on the sphere, conditioned on the camera.
+// Surfaces only. Where the pixel filters jump (a box filter's pixel edges, any filter at the film's edge
+// without sample_border) the first vertex's field does not vanish, and the flux −∮ P_j L (ṡ · n_out) across
+// those static film edges is added (diff/pixel_boundary.h), with ṡ the film velocity of the reparameterized
+// first vertex (or warped escaped direction) seen there.
 #pragma once
 #include "diff/pixel_driver.h"
 #include "diff/result.h"

@@ -114,7 +114,9 @@ WarpEstimate estimate_warp(const Vec3f& omega, std::span<const AuxiliarySample> 
         w[i] = h.w * inv_pdf;
         g[i] = h.gradient * float(inv_pdf);
     }
-    const WarpCoefficients c = warp_coefficients(w, g, o);
+    const WarpCoefficients c = o.unbiased || !o.sphere_jackknife
+                                   ? warp_coefficients(w, g, o)
+                                   : jackknife_coefficients(w, g, o.antithetic ? 2 : 1);
     // ω + P(ω) V and 1 + Σ ⟨b_i, V_i⟩ − 2 ⟨ω, V⟩ (the surface divergence of the projected field).
     Vec3<Var> field(Var(0.f));
     Var divergence(0.f);

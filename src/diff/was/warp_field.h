@@ -34,6 +34,7 @@ struct WarpOptions {
     int rr_batch = 4;       // unbiased: samples per batch (the telescoping sum runs over prefixes of batches)
     int rr_cap = 512; // unbiased: at most this many samples (the paper's cap; truncation bias beyond it)
     bool film_jackknife = true; // consistent, on the film: the delete-a-group jackknife of the ratio
+    bool sphere_jackknife = false; // consistent, on the sphere: the same jackknife (war's escaped directions)
 };
 
 // One auxiliary ray: its direction and density, the boundary test at its hit and its direct warp.
