@@ -206,11 +206,10 @@ WarVertex war_vertex(const WarScene& s, const SurfaceInteraction3f& hit, const W
     return out;
 }
 
-WarpEstimate war_direction(const WarScene& s, const Interaction3f& x, const Vec3<Var>& position,
-                           const Vec3f& omega, AuxiliaryRng& rng, uint64_t& rays) {
-    rays += uint64_t(s.options.directions.aux_count);
-    return estimate_warp_at(s.scene, s.form, s.boundary, WarpVertex{x, position}, omega, s.options.directions,
-                            rng);
+WarpEstimate war_direction(const WarScene& s, const WarpOptions& field, const Interaction3f& x,
+                           const Vec3<Var>& position, const Vec3f& omega, AuxiliaryRng& rng, uint64_t& rays) {
+    rays += uint64_t(field.aux_count);
+    return estimate_warp_at(s.scene, s.form, s.boundary, WarpVertex{x, position}, omega, field, rng);
 }
 
 } // namespace penumbra

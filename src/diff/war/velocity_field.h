@@ -59,10 +59,12 @@ struct WarFieldOptions {
     float spread = 0.012f;  // standard deviation of q′ in units of r0: 2 σ0 by measurement (docs/war.md)
     float reach = 0.25f;    // projections searched within reach · r0 of the tangent plane
     bool antithetic = true; // q′ in pairs point-reflected about p
-    // The field on the sphere at a vertex at infinity (paper 004's, diff/was/warp_field.h): N' = 32 with the
-    // jackknife of its ratio, by measurement (docs/war.md): with the paper's N' = 8 and no jackknife the
-    // escaped camera samples of Mitsuba's translate_diffuse_rectangle_constant come out 40% low.
-    WarpOptions directions{.aux_count = 32, .sphere_jackknife = true};
+    // The field on the sphere at a vertex at infinity (paper 004's, diff/was/warp_field.h): after a BSDF
+    // sample or NEE, the paper's N' = 8; for the camera's escaped samples N' = 32 with the jackknife of the
+    // ratio, by measurement (docs/war.md): at N' = 8 without it the escaped camera samples of Mitsuba's
+    // translate_diffuse_rectangle_constant come out 40% low.
+    WarpOptions directions;
+    WarpOptions camera_directions{.aux_count = 32, .sphere_jackknife = true};
 };
 
 // War's auxiliary streams, apart from was's for the same camera sample.
@@ -132,7 +134,7 @@ WarVertex war_vertex(const WarScene& s, const SurfaceInteraction3f& hit, const W
 
 // The escaped direction ω from the surface vertex x (reference `x`, material motion `position`) warped on the
 // sphere: value ω, tangent V(ω), and 1 + ∇·V.
-WarpEstimate war_direction(const WarScene& s, const Interaction3f& x, const Vec3<Var>& position,
-                           const Vec3f& omega, AuxiliaryRng& rng, uint64_t& rays);
+WarpEstimate war_direction(const WarScene& s, const WarpOptions& field, const Interaction3f& x,
+                           const Vec3<Var>& position, const Vec3f& omega, AuxiliaryRng& rng, uint64_t& rays);
 
 } // namespace penumbra

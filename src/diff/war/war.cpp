@@ -65,7 +65,7 @@ struct WarRule {
             return bsdf.eval(ctx, si, si.to_local(wo)) * ds.emitter->eval(y.si) *
                    (relative_change(g * y.jacobian) / Var(ds.pdf));
         }
-        const WarpEstimate e = war_direction(c.field, hit, here.position, ds.d, rng, rays.rays);
+        const WarpEstimate e = war_direction(c.field, c.field.options.directions, hit, here.position, ds.d, rng, rays.rays);
         return bsdf.eval(ctx, si, si.to_local(e.direction)) * (e.jacobian / Var(ds.pdf)) *
                ds.emitter->eval_environment(c.form.direction_to_reference_light(*ds.emitter, ds.d) +
                                             (e.direction - Vec3<Var>(ds.d)));
@@ -94,7 +94,7 @@ struct WarRule {
             next_si = x.si;
             material = x.material;
         } else {
-            const WarpEstimate e = war_direction(c.field, hit, material, d, rng, rays.rays);
+            const WarpEstimate e = war_direction(c.field, c.field.options.directions, hit, material, d, rng, rays.rays);
             throughput *= bsdf.eval(ctx, si, si.to_local(e.direction)) * (e.jacobian / Var(bs.pdf));
             escaped = e.direction;
         }
@@ -117,7 +117,7 @@ struct EscapedFirstVertex {
 };
 bool escaped_first_vertex(const WarScene& c, const Ray& ray, AuxiliaryRng& rng, uint64_t& rays,
                           EscapedFirstVertex& out) {
-    const WarpEstimate e = war_direction(c, Interaction3f{Infinity, ray.o, Vec3f(0.f)},
+    const WarpEstimate e = war_direction(c, c.options.camera_directions, Interaction3f{Infinity, ray.o, Vec3f(0.f)},
                                          c.form.camera_position(ray.o), ray.d, rng, rays);
     const Vec3<Var> d_cam = c.form.direction_to_reference_camera(e.direction);
     Var film_jacobian;

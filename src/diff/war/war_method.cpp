@@ -18,6 +18,7 @@ class WarMethod final : public DerivativeMethod {
         f.spread = float(o.get_float("war-spread", f.spread));
         f.antithetic = !o.get_bool("no-antithetic", false);
         f.directions.antithetic = f.antithetic;
+        f.camera_directions.antithetic = f.antithetic;
     }
 
   protected:
