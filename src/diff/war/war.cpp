@@ -20,10 +20,14 @@ struct WarContext {
     BoundaryTest boundary;
     WarScene field;
     PathSettings settings;
+    bool environment = false; // an infinite emitter that is not delta (MaterialForm::environment's sum)
 
     WarContext(const Scene& s, const Parameters& p, const WarOptions& o)
         : scene(s), params(p), form(s, p, FirstVertex::Material),
-          boundary(s), field{s, p, form, boundary, o.field}, settings(o.path) {}
+          boundary(s), field{s, p, form, boundary, o.field}, settings(o.path) {
+        for (const auto& e : s.emitters)
+            environment = environment || (e->is_infinite() && !e->is_delta());
+    }
 };
 
 // The vertex rule of the unidirectional estimator (render/path_tracer.h; Algorithm 2 lines 6–17): every vertex
@@ -140,7 +144,8 @@ Color3<Var> camera_sample(const WarContext& c, Sampler& sampler, AuxiliaryRng& r
     ++rays.rays;
     const SurfaceInteraction3f first = c.scene.intersect(ray);
     if (!first.is_valid()) {
-        if (c.settings.hide_emitters) return Color3<Var>(Var(0.f));
+        // Without an environment the escaped sample carries nothing: no auxiliary rays for its warp.
+        if (c.settings.hide_emitters || !c.environment) return Color3<Var>(Var(0.f));
         EscapedFirstVertex x1;
         if (!escaped_first_vertex(c.field, ray, rng, rays.rays, x1)) return Color3<Var>(Var(0.f));
         const Var factor = film.filter_weight(px, py, x1.s) * relative_change(x1.jacobian) / Var(fs.pdf);
