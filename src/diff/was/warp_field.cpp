@@ -102,6 +102,19 @@ WarpCoefficients jackknife_coefficients(std::span<const double> w, std::span<con
     return out;
 }
 
+namespace {
+
+// The warp's coefficients: for the consistent estimator with `jackknife`, the delete-a-group jackknife of the
+// ratio (antithetic pairs as groups); otherwise warp_coefficients (the plain ratio, or the unbiased
+// telescoping sum).
+WarpCoefficients ratio_coefficients(std::span<const double> w, std::span<const Vec3f> g, const WarpOptions& o,
+                                    bool jackknife) {
+    return o.unbiased || !jackknife ? warp_coefficients(w, g, o)
+                                    : jackknife_coefficients(w, g, o.antithetic ? 2 : 1);
+}
+
+} // namespace
+
 WarpEstimate estimate_warp(const Vec3f& omega, std::span<const AuxiliarySample> aux, const WarpOptions& o) {
     const size_t n = aux.size();
     // Algorithm 2 lines 6–7: w_i and ∂ω w_i, each divided by the vMF density of ω'_i.
@@ -114,9 +127,7 @@ WarpEstimate estimate_warp(const Vec3f& omega, std::span<const AuxiliarySample> 
         w[i] = h.w * inv_pdf;
         g[i] = h.gradient * float(inv_pdf);
     }
-    const WarpCoefficients c = o.unbiased || !o.sphere_jackknife
-                                   ? warp_coefficients(w, g, o)
-                                   : jackknife_coefficients(w, g, o.antithetic ? 2 : 1);
+    const WarpCoefficients c = ratio_coefficients(w, g, o, o.sphere_jackknife);
     // ω + P(ω) V and 1 + Σ ⟨b_i, V_i⟩ − 2 ⟨ω, V⟩ (the surface divergence of the projected field).
     Vec3<Var> field(Var(0.f));
     Var divergence(0.f);
@@ -142,8 +153,7 @@ PixelWarpEstimate estimate_pixel_warp(const Vec2f& x, std::span<const PixelAuxil
         w[i] = h.w * inv_pdf;
         g[i] = h.gradient * float(inv_pdf);
     }
-    const WarpCoefficients c = o.unbiased || !o.film_jackknife ? warp_coefficients(w, g, o)
-                                                                 : jackknife_coefficients(w, g, o.antithetic ? 2 : 1);
+    const WarpCoefficients c = ratio_coefficients(w, g, o, o.film_jackknife);
     Var vx(0.f), vy(0.f), divergence(0.f);
     for (size_t i = 0; i < n; ++i) {
         if (aux[i].warp.x.is_constant() && aux[i].warp.y.is_constant()) continue;
