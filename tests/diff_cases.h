@@ -6,6 +6,7 @@
 // thread counts, errors naming the way out), and for the paper suites (scenes/war, scenes/was) the method
 // table and the check of one scene against its finite differences.
 #pragma once
+#include "core/error.h"
 #include "diff/method.h"
 #include "diff_check.h"
 #include "studies/ad_suite.h"
@@ -109,6 +110,14 @@ inline std::optional<FiniteDifference> stored_war_reference(const ValidationCase
     std::vector<std::string> defines;
     const AdSuiteScene s = reference_key(c, defines);
     return read_cached_reference(war_reference_cache, s, res, c.h, c.fd_spp, defines, WarReferenceSeed);
+}
+
+// The stored reference, for the tests that only read it (tests/test_diff_war.cpp owns them: it computes and
+// stores a missing or stale one).
+inline FiniteDifference stored_war_reference_or_throw(const ValidationCase& c, int res) {
+    auto stored = stored_war_reference(c, res);
+    if (!stored) throw Error("no stored reference for " + c.label + ": run tests/test_diff_war.cpp's case");
+    return *stored;
 }
 
 // A method's derivative through the method front, with the given options.

@@ -26,13 +26,6 @@ constexpr int Res = 16, Spp = 1024;
 
 LoadedCase load(const ValidationCase& c) { return load_validation(c, Res); }
 
-// The stored reference (never recomputed here: tests/test_diff_war.cpp owns them).
-FiniteDifference reference(const ValidationCase& c) {
-    auto stored = stored_war_reference(c, Res);
-    if (!stored) throw Error("no stored reference for " + c.label + ": run tests/test_diff_war.cpp's case");
-    return *stored;
-}
-
 class WarBdptBoundaryScenes : public testing::TestWithParam<ValidationCase> {};
 
 // Cases left out (reported as skipped, never as passed). Measured at 16 × 16, 1024 spp (16 batches), seeds 7
@@ -58,7 +51,7 @@ TEST_P(WarBdptBoundaryScenes, MatchesFiniteDifferences) {
     if (const char* why = not_passing(c.label)) GTEST_SKIP() << "open: " << why;
     const uint64_t seed = test_seed();
     LoadedCase l = load(c);
-    const FiniteDifference fd = reference(c);
+    const FiniteDifference fd = stored_war_reference_or_throw(c, Res);
     const DerivativeImage d = method_derivative("war-bdpt", options(c), l, Spp, 7 + 1000 * seed, 16);
     const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
     std::printf("  %s, %d spp in %.1f s: %s\n", c.label.c_str(), Spp, d.seconds, describe(check).c_str());

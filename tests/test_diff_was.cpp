@@ -14,7 +14,8 @@ namespace {
 
 // The validation cases at 16 × 16 with 1024 samples per pixel (16 batches of 64: the estimator's tails are
 // heavy, and batches of a few samples understate its standard errors); the camera motion with a box filter
-// takes the pixel-edge term (diff/was/warped_area.h).
+// takes the pixel-edge term (diff/was/warped_area.h). Their central differences are war's stored references
+// (scenes/validation/war_fd, tests/test_diff_war.cpp): the same h, samples and seed this file used to render.
 const std::vector<ValidationCase>& cases = validation_cases();
 
 constexpr int Spp = 1024;
@@ -48,10 +49,7 @@ TEST_P(WasBoundaryScenes, MatchesFiniteDifferences) {
     if (const char* why = consistent_bias(c.label)) GTEST_SKIP() << "open: " << why;
     const uint64_t seed = test_seed();
     LoadedCase l = load(c);
-    RenderOptions ro;
-    ro.spp = c.fd_spp;
-    ro.seed = 99 + 1000 * seed;
-    const FiniteDifference fd = finite_difference(*l.scene, *l.params, c.h, ro, 16);
+    const FiniteDifference fd = stored_war_reference_or_throw(c, 16);
     const DerivativeImage d = was(l, Spp, {}, 3 + 1000 * seed);
     const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
     std::printf("  %s (%s), %d spp in %.1f s: %s\n", c.label.c_str(), d.description.c_str(), Spp, d.seconds,
@@ -69,10 +67,7 @@ TEST(WasUnbiased, MatchesFiniteDifferences) {
     const uint64_t seed = test_seed();
     for (const ValidationCase& c : {cases[0], cases[1], cases[5], cases[6]}) {
         LoadedCase l = load(c);
-        RenderOptions ro;
-        ro.spp = c.fd_spp;
-        ro.seed = 99 + 1000 * seed;
-        const FiniteDifference fd = finite_difference(*l.scene, *l.params, c.h, ro, 16);
+        const FiniteDifference fd = stored_war_reference_or_throw(c, 16);
         const DerivativeImage d = was(l, 2 * Spp, {{"was-unbiased", "true"}}, 5 + 1000 * seed);
         const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
         std::printf("  %s (%s), %d spp in %.1f s: %s\n", c.label.c_str(), d.description.c_str(), 2 * Spp,
