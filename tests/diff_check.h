@@ -139,15 +139,15 @@ inline std::string describe(const DiffCheck& c) {
            std::to_string(c.comparison.mean_z) + ", outliers(4σ, 2x2 blocks) " + std::to_string(c.outliers_4sigma);
 }
 
-// A moving shadow: the derivative `d` and its interior term alone against central differences at h = 1e-2 (16
-// batches of `ro`), whose standard error takes in the detection limit and the truncation error (from 2h). The
-// total must match; the interior term alone must miss the shadow's motion. `label` names the case in the log.
-inline void expect_only_the_total_matches(const std::string& label, Scene& scene, Parameters& params,
-                                          const DerivativeImage& d, const RenderOptions& ro) {
-    const FiniteDifference fd = finite_difference(scene, params, 1e-2, ro, 16);
-    const FiniteDifference fd2 = finite_difference(scene, params, 2e-2, ro, 16);
+// A moving shadow: the derivative `d` and its interior term alone against central differences `fd` at step h
+// (`samples` per pixel and side) whose standard error takes in the detection limit and the truncation error
+// (from `fd2` at 2h). The total must match; the interior term alone must miss the shadow's motion. `label`
+// names the case in the log.
+inline void expect_only_the_total_matches(const std::string& label, const Scene& scene,
+                                          const DerivativeImage& d, const FiniteDifference& fd,
+                                          const FiniteDifference& fd2, double h, int samples) {
     const Image reference_error = with_truncation_error(
-        with_detection_limit(fd, d.primal, 1e-2, ro.spp * 16, scene.sensor->film->rfilter->radius()), fd, fd2);
+        with_detection_limit(fd, d.primal, h, samples, scene.sensor->film->rfilter->radius()), fd, fd2);
     const DiffCheck total = check_against(d.derivative, d.stderr_img, fd.derivative, reference_error);
     const DerivativeTerm& interior_term = d.term("interior");
     const DiffCheck interior =
@@ -156,6 +156,14 @@ inline void expect_only_the_total_matches(const std::string& label, Scene& scene
                 describe(interior).c_str());
     EXPECT_TRUE(total.passes()) << describe(total);
     EXPECT_FALSE(interior.passes()) << "the interior term alone must miss the moving shadow: " << describe(interior);
+}
+
+// The same against central differences computed here at h = 1e-2 and 2e-2 (16 batches of `ro`).
+inline void expect_only_the_total_matches(const std::string& label, Scene& scene, Parameters& params,
+                                          const DerivativeImage& d, const RenderOptions& ro) {
+    const FiniteDifference fd = finite_difference(scene, params, 1e-2, ro, 16);
+    const FiniteDifference fd2 = finite_difference(scene, params, 2e-2, ro, 16);
+    expect_only_the_total_matches(label, scene, d, fd, fd2, 1e-2, ro.spp * 16);
 }
 
 } // namespace penumbra::test

@@ -4,6 +4,7 @@
 #include "core/rng.h"
 #include "diff/psdr/psdr.h"
 #include "diff_check.h"
+#include "stored_reference.h"
 #include "xml_test_util.h"
 
 #include <gtest/gtest.h>
@@ -17,8 +18,11 @@ const std::string validation = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/valid
 
 // A hard shadow moved by the light (shadow.xml): interior + direct boundary must match the finite differences
 // (with the reference's truncation error and detection limit, as in test_diff_boundary.cpp), the interior
-// term alone must miss the moving shadow.
-void expect_moving_light_shadow_matches(const std::string& light, const std::string& param) {
+// term alone must miss the moving shadow. The references at h = 1e-2 and 2e-2 are stored (tests/data/fd,
+// scripts/make_test_references.sh; `reference` and `reference`_2h) at twice the samples this test used to
+// render.
+void expect_moving_light_shadow_matches(const std::string& light, const std::string& param,
+                                        const std::string& reference) {
     auto scene = load_scene(validation + "shadow.xml", {{"res", "32"}, {"light", light}});
     Parameters params(*scene);
     params.enable({parse_param_selection(param)});
@@ -33,10 +37,9 @@ void expect_moving_light_shadow_matches(const std::string& light, const std::str
     o.direct_spp = 512;
     o.indirect_spp = 0;
     const DerivativeImage d = psdr_derivative(*scene, params, o);
-    RenderOptions ro;
-    ro.spp = 512;
-    ro.seed = 99 + 1000 * run;
-    expect_only_the_total_matches("shadow.xml " + param, *scene, params, d, ro);
+    const StoredReference fd = stored_reference({reference, {"light=" + light}}, 1e-2);
+    const StoredReference fd2 = stored_reference({reference + "_2h", {"light=" + light}}, 2e-2);
+    expect_only_the_total_matches("shadow.xml " + param, *scene, d, fd.fd, fd2.fd, fd.h, fd.samples);
 }
 
 // The interior derivative alone against finite differences (no visibility edge moves). The reference's
@@ -79,12 +82,12 @@ const std::string camera_and_floor = R"(
 
 // (1) A point light translating above an occluder: shading (1/r², cosines) and the shadow edge move.
 TEST(EmitterMotion, TranslatingPointLightMovesShadingAndShadow) {
-    expect_moving_light_shadow_matches("point", "bulb.translate=1,0,0.5");
+    expect_moving_light_shadow_matches("point", "bulb.translate=1,0,0.5", "bulb_translate");
 }
 
 // (3) A directional light turning: its shadow slides across the floor and the cosine changes.
 TEST(EmitterMotion, RotatingDirectionalLightMovesItsShadow) {
-    expect_moving_light_shadow_matches("directional", "sun.rotate=0,0,1");
+    expect_moving_light_shadow_matches("directional", "sun.rotate=0,0,1", "sun_rotate");
 }
 
 // (2) A spot light turning about its position, and translating: its falloff ring (beam_width < cutoff_angle,
