@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# Regenerates the stored central-difference references of the boundary and light-motion tests
-# (tests/data/fd/suite.json, read by tests/stored_reference.h): for every scene of the manifest, with its -D
-# defines, `penumbra ad-suite --fd-only` at the scene's ci_res writes NAME_fd.exr, NAME_fd_stderr.exr and the key
-# NAME_fd.json (seed 2, 16 batches, ci_fd_spp samples per pixel and side, stratified).
+# Regenerates the stored central-difference references of the boundary, light-motion, instancing and war
+# environment tests (tests/data/fd/suite.json, read by tests/stored_reference.h): for every scene of the
+# manifest, with its -D defines, `penumbra ad-suite --fd-only` at the scene's ci_res writes NAME_fd.exr,
+# NAME_fd_stderr.exr and the key NAME_fd.json (seed 2, 16 batches, ci_fd_spp samples per pixel and side,
+# stratified).
 # Run from the repository root after building build/penumbra:
 #     scripts/make_test_references.sh            # every scene
 #     scripts/make_test_references.sh shadow_sky # only these
@@ -33,10 +34,8 @@ reference shadow_point_2h 32 light=point
 reference shadow_directional 32 light=directional
 reference shadow_directional_2h 32 light=directional
 reference shadow_sky 24 light=sky occluder_height=0.6
-reference moving_light 32 light=area
 reference glossy_shadow 32 light=area
 reference pixel_edges_translate 32
-reference pixel_edges_rotate 32
 reference bulb_translate 32 light=point
 reference bulb_translate_2h 32 light=point
 reference sun_rotate 32 light=directional
@@ -45,3 +44,8 @@ reference shadow_projector 32 light=projector
 reference shadow_projector_2h 32 light=projector
 reference tessellated_sphere_light 24 light=sphere
 reference tessellated_rectangle_light 24 light=rectangle
+reference instance_translate 32
+reference instance_translate_2h 32
+reference instance_vertices 32
+reference instance_vertices_2h 32
+reference rectangle_over_environment 16
