@@ -6,6 +6,7 @@
 // ones).
 #include "diff/war/war.h"
 #include "diff_cases.h"
+#include "stored_reference.h"
 
 #include <gtest/gtest.h>
 
@@ -92,7 +93,8 @@ TEST(WarBoundaryScenes, AgreesWithPsdr) {
 // (scenes/mitsuba_ad/) at 16 × 16. The directions that escape are a region bounded by the square's edges, and
 // it moves with them: each escaped camera sample is warped on the sphere (war.cpp, escaped_first_vertex).
 // Unwarped, they gave the negative of the derivative (relerr4 2.0 at 32 × 32); with the sphere field at the
-// paper's N' = 8 and no jackknife, 40% low (docs/war.md).
+// paper's N' = 8 and no jackknife, 40% low (docs/war.md). The central differences are stored (tests/data/fd,
+// scripts/make_test_references.sh) at 2.25x the samples this test used to render.
 TEST(WarEnvironment, RectangleOverTheEnvironmentMatchesFiniteDifferences) {
     LoadedCase l;
     l.scene = load_scene(std::string(PENUMBRA_SOURCE_DIR) +
@@ -100,10 +102,7 @@ TEST(WarEnvironment, RectangleOverTheEnvironmentMatchesFiniteDifferences) {
                          {{"res", "16"}});
     l.params = std::make_unique<Parameters>(*l.scene);
     l.params->enable({parse_param_selection("rectangle.translate=1,0,0")});
-    RenderOptions ro;
-    ro.spp = 4096;
-    ro.seed = 5;
-    const FiniteDifference fd = finite_difference(*l.scene, *l.params, 0.008, ro, 16);
+    const FiniteDifference fd = stored_reference({"rectangle_over_environment", {}}, 0.008).fd;
     const DerivativeImage d = method_derivative("war", {}, l, 256, 7 + 1000 * test_seed(), 8);
     const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
     std::printf("  rectangle over the environment, 256 spp in %.1f s: %s\n", d.seconds,

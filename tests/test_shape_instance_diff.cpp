@@ -4,6 +4,7 @@
 #include "diff/psdr/psdr.h"
 #include "diff_check.h"
 #include "scene/scene.h"
+#include "stored_reference.h"
 #include "xml_test_util.h"
 
 #include <gtest/gtest.h>
@@ -19,40 +20,10 @@ using namespace penumbra::test;
 namespace {
 
 // Two instances of a group holding one quad in front of a diffuse wall, lit by a point light at the camera
-// (the quads' shadows hide behind them: motions change primary visibility only). Instance `right` is rotated
-// and scaled, so a group-space direction moves it along another world direction than `left`.
-std::string quads_scene(int res) {
-    return scene(R"(
-    <integrator type="path"><integer name="max_depth" value="2"/></integrator>
-    <sensor type="perspective">
-        <float name="fov" value="35"/>
-        <transform name="to_world"><lookat origin="0, 0, 4" target="0, 0, 0" up="0, 1, 0"/></transform>
-        <film type="hdrfilm"><integer name="width" value=")" +
-                 std::to_string(res) + R"("/>
-            <integer name="height" value=")" +
-                 std::to_string(res) + R"("/><rfilter type="gaussian"/></film>
-    </sensor>
-    <shape type="rectangle" id="wall">
-        <transform name="to_world"><scale value="4"/><translate z="-1"/></transform>
-        <bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.6, 0.5"/></bsdf>
-    </shape>
-    <shape type="shapegroup" id="group">
-        <shape type="rectangle" id="quad">
-            <transform name="to_world"><scale value="0.3"/><rotate z="1" angle="15"/></transform>
-            <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.3, 0.8"/></bsdf>
-        </shape>
-    </shape>
-    <shape type="instance" id="left"><ref id="group"/>
-        <transform name="to_world"><translate x="-0.5" y="0.1"/></transform>
-    </shape>
-    <shape type="instance" id="right"><ref id="group"/>
-        <transform name="to_world"><scale x="0.8" y="1.2"/><rotate z="1" angle="70"/><translate x="0.55" y="-0.1"/></transform>
-    </shape>
-    <emitter type="point">
-        <point name="position" value="0, 0, 4"/>
-        <rgb name="intensity" value="12"/>
-    </emitter>)");
-}
+// (scenes/validation/instanced_quads.xml).
+const std::string quads_file = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/validation/instanced_quads.xml";
+
+std::unique_ptr<Scene> quads_scene(int res) { return load_scene(quads_file, {{"res", std::to_string(res)}}); }
 
 // PENUMBRA_TEST_SEED re-runs the checks with other random numbers (to see that they do not pass by luck).
 uint64_t seed_offset() {
@@ -71,19 +42,18 @@ PsdrOptions batched(const Scene& scene, int interior, int primary) {
 }
 
 // The psdr derivative (interior + primary boundary) of `param` against central differences (step h, with the
-// Richardson estimate of the truncation error); the interior term alone must miss the moving silhouettes.
-void expect_matches_fd(const std::string& param, double h) {
+// Richardson estimate of the truncation error from 2h), stored as `reference` and `reference`_2h
+// (tests/data/fd, scripts/make_test_references.sh) at 4x the samples this test used to render; the interior
+// term alone must miss the moving silhouettes.
+void expect_matches_fd(const std::string& param, double h, const std::string& reference) {
     const auto start = std::chrono::steady_clock::now();
-    auto scene = load_scene_string(quads_scene(32));
+    auto scene = quads_scene(32);
     Parameters params(*scene);
     params.enable({parse_param_selection(param)});
     const DerivativeImage d = psdr_derivative(*scene, params, batched(*scene, 16, 16));
-    RenderOptions ro;
-    ro.spp = 256;
-    ro.seed = 99 + seed_offset();
-    const FiniteDifference fd = finite_difference(*scene, params, h, ro, 16);
+    const FiniteDifference fd = stored_reference({reference, {}}, h).fd;
     const Image error =
-        with_truncation_error(fd.stderr_img, fd, finite_difference(*scene, params, 2 * h, ro, 16));
+        with_truncation_error(fd.stderr_img, fd, stored_reference({reference + "_2h", {}}, 2 * h).fd);
     const DiffCheck total = check_against(d.derivative, d.stderr_img, fd.derivative, error);
     const DiffCheck interior =
         check_against(d.term("interior").derivative, d.term("interior").stderr_img, fd.derivative, error);
@@ -100,8 +70,8 @@ void expect_matches_fd(const std::string& param, double h) {
 // Flattening changes how rays find the geometry (world-space triangles instead of instance rays), not what
 // they find: the same image up to float rounding of the hit distances.
 TEST(InstanceDerivatives, FlattenedSceneRendersAsTheInstancedOne) {
-    auto instanced = load_scene_string(quads_scene(48));
-    auto flat = load_scene_string(quads_scene(48));
+    auto instanced = quads_scene(48);
+    auto flat = quads_scene(48);
     flat->flatten_instances();
     ASSERT_TRUE(flat->instances.empty());
     ASSERT_EQ(flat->shapes.size(), 3u);
@@ -129,7 +99,7 @@ TEST(InstanceDerivatives, FlattenedSceneRendersAsTheInstancedOne) {
 }
 
 TEST(InstanceDerivatives, ParametersNameTheInstancesAndTheSharedGeometry) {
-    auto scene = load_scene_string(quads_scene(16));
+    auto scene = quads_scene(16);
     Parameters params(*scene);
     for (const char* name : {"left.translate", "left.rotate", "left.scale", "right.translate",
                              "quad.vertex_positions", "quad.bsdf.reflectance"})
@@ -165,7 +135,7 @@ TEST(InstanceDerivatives, InstanceMotionsMoveAllItsShapes) {
 
 // Displacing a group shape's vertex_positions moves every copy by its own instance's to_world.
 TEST(InstanceDerivatives, SharedVerticesMoveEveryCopy) {
-    auto scene = load_scene_string(quads_scene(16));
+    auto scene = quads_scene(16);
     Parameters params(*scene);
     const Vec3f left0 = scene->shapes[1]->mesh.positions[2], right0 = scene->shapes[2]->mesh.positions[2];
     params.enable({parse_param_selection("quad.vertex_positions=0,0,0,0,0,0,0.1,0,0,0,0,0")});
@@ -182,20 +152,20 @@ TEST(InstanceDerivatives, SharedVerticesMoveEveryCopy) {
 }
 
 TEST(InstanceDerivatives, InstanceTranslationMatchesFiniteDifferences) {
-    expect_matches_fd("left.translate=1,0.5,0", 1e-2);
+    expect_matches_fd("left.translate=1,0.5,0", 1e-2, "instance_translate");
 }
 
 // A non-rigid change of the shared quad (one corner pulled outwards, one pushed along the edge): both
 // silhouettes move, each by its own instance's linear map.
 TEST(InstanceDerivatives, SharedVertexPositionsMatchFiniteDifferences) {
-    expect_matches_fd("quad.vertex_positions=0,0,0,1,-0.5,0,0,0,0,0,0.6,0", 1e-2);
+    expect_matches_fd("quad.vertex_positions=0,0,0,1,-0.5,0,0,0,0,0,0.6,0", 1e-2, "instance_vertices");
 }
 
 // Reverse mode sees the shared vertices too: ⟨a, Jv⟩ = ⟨Jᵀa, v⟩ on the same samples (psdr_gradient uses the
 // seeds of psdr_derivative's single batch), the gradient reaching the group-space vertices through both
 // copies.
 TEST(InstanceDerivatives, ReverseModeOfSharedVerticesIsTheAdjoint) {
-    auto scene = load_scene_string(quads_scene(24));
+    auto scene = quads_scene(24);
     Parameters params(*scene);
     params.enable({parse_param_selection("quad.vertex_positions=0,0,0,1,-0.5,0,0,0,0,0,0.6,0")});
     PsdrOptions o;
@@ -216,9 +186,7 @@ TEST(InstanceDerivatives, ReverseModeOfSharedVerticesIsTheAdjoint) {
 }
 
 TEST(InstanceDerivatives, ParamsCommandListsTheInstanceMotions) {
-    TempDir dir;
-    const std::string file = dir.write("quads.xml", quads_scene(16));
-    FILE* pipe = popen((std::string(PENUMBRA_CLI) + " params " + file + " 2>&1").c_str(), "r");
+    FILE* pipe = popen((std::string(PENUMBRA_CLI) + " params " + quads_file + " 2>&1").c_str(), "r");
     ASSERT_TRUE(pipe);
     std::string out;
     std::array<char, 4096> buf;
