@@ -98,9 +98,13 @@ def test_gradients_flow_into_non_leaf_tensors(box_scene):
 
 def test_pose_gradient_matches_finite_differences(box_scene):
     # The box moving up (+y) and sideways (+x): psdr (with boundary terms) through autograd against central
-    # differences of L = Σ W ⊙ I, 6 seeds each; z-score of the mean and a relative error bound.
+    # differences of L = Σ W ⊙ I, 6 seeds each; z-score of the mean and a relative error bound. The box rests on
+    # the floor, so the image has a kink in y (lifting: -11.5 ± 0.4, pressing in: -9.0 ± 0.3, by one-sided
+    # differences at h = 0.01, 8 × 2048 spp); the central difference is their mean (-10.2), psdr's -9.7 holds the
+    # contact for the normal motion (docs/design.md, "Contacts"; open in issue 35). The reference's noise must stay
+    # well below the 15% bound: 1024 spp per side (at 64 spp its standard error was 12% of the mean).
     W = weights(16, 24)
-    h = 0.02
+    h = 0.01
     grads, fds = [], []
     for k in range(6):
         t = torch.zeros(3, requires_grad=True)
@@ -110,8 +114,8 @@ def test_pose_gradient_matches_finite_differences(box_scene):
         for axis in range(2):
             e = torch.zeros(3)
             e[axis] = h
-            lp = (W * penumbra.render(box_scene, params={"box.translate": e}, spp=64, seed=20 + k)).sum()
-            lm = (W * penumbra.render(box_scene, params={"box.translate": -e}, spp=64, seed=20 + k)).sum()
+            lp = (W * penumbra.render(box_scene, params={"box.translate": e}, spp=1024, seed=20 + k)).sum()
+            lm = (W * penumbra.render(box_scene, params={"box.translate": -e}, spp=1024, seed=20 + k)).sum()
             fd.append(float(lp - lm) / (2 * h))
         fds.append(torch.tensor(fd))
     g, f = torch.stack(grads).double(), torch.stack(fds).double()

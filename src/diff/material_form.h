@@ -2,6 +2,18 @@
 // material points (triangle, barycentrics) and re-evaluated on the spatial geometry x = X(p, θ), with the area
 // Jacobian J(p) = dA(x)/dA(p) (Eq. 17). X is evaluated at θ0 (the identity) with its exact first derivative.
 // The first vertex may instead be parameterized by its camera ray (diff/first_vertex.h).
+//
+// Contacts. Where two surfaces touch (a box resting on a floor) and move relative to each other, the
+// material form's integrand has a singularity: for x on one surface and y on the other, d/dθ G(x, y) grows
+// like |v_x − v_y| / |x − y| · G, whose integral over path space is not absolutely convergent (the interior
+// estimate is Cauchy-tailed: its mean jumps from seed to seed). Any flow of the reference configuration is as
+// good as the material one (the boundary terms take velocities relative to it), so a vertex y reached by a
+// BSDF sample from x near it is instead carried along the fixed direction ω from x(θ) (its "attached" position,
+// where the ray meets y's moving triangle; the solid-angle form of the segment, in which G J is constant), blended
+// with its material point by χ(|x − y|) (1 within half the contact length, 0 beyond it, smooth between):
+//     V_y = V_mat + χ (V_att − V_mat),  div V_y = div V_mat + χ (div V_att − div V_mat) + ∇χ · (V_att − V_mat).
+// Emitter vertices stay material (next-event and BSDF samples of a light share one flow); static pairs have
+// V_att = V_mat.
 #pragma once
 #include "diff/first_vertex.h"
 #include "diff/parameters.h"
@@ -121,11 +133,16 @@ inline Vec3<Var> to_reference_light(const Parameters& params, const Emitter& e, 
     return y;
 }
 
+// The contact length of a scene: vertices within it of their predecessor are carried by the blended flow
+// (docs/design.md, "Contacts").
+float contact_length(const Scene& scene);
+
 class MaterialForm {
 public:
-    MaterialForm(const Scene& scene, const Parameters& params, FirstVertex first_vertex)
+    // contact: whether vertices near their predecessor follow the contact flow (above).
+    MaterialForm(const Scene& scene, const Parameters& params, FirstVertex first_vertex, bool contact = true)
         : params_(params), image_space_first_vertex_(penumbra::image_space_first_vertex(scene, params, first_vertex)),
-          volume_motion_(scene, params) {}
+          contact_length_(contact ? contact_length(scene) : 0.f), volume_motion_(scene, params) {}
 
     // Whether the first path vertex is parameterized by its (fixed) camera ray instead of its material point.
     bool image_space_first_vertex() const { return image_space_first_vertex_; }
@@ -149,8 +166,24 @@ public:
         const Vec2<Var> bary(Var(hit.bary.x, b1.id), Var(hit.bary.y, b2.id));
         return surface_interaction<Var>(*hit.shape, hit.prim_index, bary, moved);
     }
+    // The vertex `hit`, reached by a BSDF sample from the vertex at `prev` (its position on the tape), under the
+    // contact flow, with its relative area Jacobian (value 1): the material vertex and J(p) unless `hit` lies
+    // within the contact length of `prev` on a shape that emits nothing.
+    SurfaceInteraction<Var> flowed_vertex(const SurfaceInteraction3f& hit, const Vec3<Var>& prev, Var& jacobian) const;
+    // The blend weight χ(r) of the contact flow at distance r from the predecessor, and dχ/dr.
+    float contact_weight(float r, float* derivative = nullptr) const;
     // A vertex of a shape at X(p, θ).
     Vec3<Var> position(const Shape& shape, uint32_t v) const { return vertices(shape).position(v); }
+    // A point of a contact curve: the moving point x(θ) of an edge that lies on the triangle `prim` of
+    // `surface` (an object resting on it), projected onto the triangle's moving plane. Across the curve the
+    // surface is hidden on one side (under the object); the curve moves over the surface with the edge's
+    // tangential motion only (docs/design.md, "Contacts").
+    Vec3<Var> contact_point(const Shape& surface, uint32_t prim, const Vec3<Var>& x) const {
+        const uint32_t* i = &surface.mesh.indices[3 * size_t(prim)];
+        const Vec3<Var> p0 = position(surface, i[0]);
+        const Vec3<Var> n = cross(position(surface, i[1]) - p0, position(surface, i[2]) - p0);
+        return x - n * (dot(x - p0, n) / dot(n, n));
+    }
     // A medium vertex x = X(p, θ) of `medium` with its volume Jacobian dV(x)/dV(p) (Eq. 46).
     Vec3<Var> medium_vertex(const Vec3f& p, const Medium* medium, Var& jacobian) const {
         return volume_motion_.position(p, medium, &jacobian);
@@ -230,6 +263,7 @@ private:
     MovedVertices vertices(const Shape& shape) const { return {shape, params_.motions(&shape)}; }
     const Parameters& params_;
     bool image_space_first_vertex_;
+    float contact_length_;
     VolumeMotion volume_motion_;
 };
 

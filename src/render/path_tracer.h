@@ -190,13 +190,18 @@ Color3<T> trace_path(const Scene& scene, Sampler& sampler, const Ray& primary, c
 }
 
 // The vertex rule of a Geometry (paper 001 §5.1): vertices are the material points of the sampled hits placed by
-// the geometry x(p, θ), with the area Jacobian J; T = float on ReferenceGeometry is the primal estimator.
+// the geometry x(p, θ), with the area Jacobian J; T = float on ReferenceGeometry is the primal estimator. On the
+// tape a vertex reached by a BSDF sample follows the geometry's flow from its predecessor (MaterialForm's
+// contact flow: the material point away from contacts).
 template <typename T, typename Geometry> struct GeometryRule {
     static constexpr bool reference = std::is_same_v<T, float>;
     const Geometry& geometry;
+    SurfaceInteraction<T> next{}; // the vertex scatter() placed, which arrive() returns
+    bool placed = false;
 
-    SurfaceInteraction<T> arrive(const SurfaceInteraction3f& hit, const SurfaceInteraction<T>& prev) const {
-        SurfaceInteraction<T> si = geometry.vertex(hit);
+    SurfaceInteraction<T> arrive(const SurfaceInteraction3f& hit, const SurfaceInteraction<T>& prev) {
+        SurfaceInteraction<T> si = placed ? next : geometry.vertex(hit);
+        placed = false;
         if constexpr (reference) si.wi = hit.wi;
         else si.wi = si.to_local(normalize(prev.p - si.p));
         return si;
@@ -217,22 +222,26 @@ template <typename T, typename Geometry> struct GeometryRule {
     }
 
     void scatter(const BSDF& bsdf, const SurfaceInteraction3f&, const SurfaceInteraction<T>& si,
-                 const BSDFSample& bs, const Color3f& weight, const Vec3f& d, const SurfaceInteraction3f& next,
-                 bool delta, Color3<T>& throughput, RayCounter&) const {
+                 const BSDFSample& bs, const Color3f& weight, const Vec3f& d, const SurfaceInteraction3f& next_hit,
+                 bool delta, Color3<T>& throughput, RayCounter&) {
         using std::abs;
         using std::sqrt;
         const BSDFContext ctx{TransportMode::Radiance};
-        if (delta || reference) {
-            // Reference: weight = f/p. Delta lobes fix the direction (the paper's assumption A.1 excludes them:
-            // no derivative flows through them).
+        if constexpr (reference) {
+            throughput *= Color3<T>(weight); // weight = f/p
+        } else if (delta) {
+            // Delta lobes fix the direction (the paper's assumption A.1 excludes them: no derivative flows
+            // through them).
             throughput *= Color3<T>(weight);
-        } else if (next.is_valid()) {
-            const SurfaceInteraction<T> x2 = geometry.vertex(next);
-            const Vec3<T> to_next = x2.p - si.p;
+        } else if (next_hit.is_valid()) {
+            T jacobian;
+            next = geometry.flowed_vertex(next_hit, si.p, jacobian);
+            placed = true;
+            const Vec3<T> to_next = next.p - si.p;
             const T dist2 = squared_norm(to_next);
             const Vec3<T> wo = to_next / sqrt(dist2);
-            const T g = abs(dot(x2.n, wo)) / dist2;
-            throughput *= bsdf.eval(ctx, si, si.to_local(wo)) * (relative_change(g * geometry.jacobian(next)) / T(bs.pdf));
+            const T g = abs(dot(next.n, wo)) / dist2;
+            throughput *= bsdf.eval(ctx, si, si.to_local(wo)) * (relative_change(g * jacobian) / T(bs.pdf));
         } else {
             throughput *= bsdf.eval(ctx, si, si.to_local(Vec3<T>(d))) / T(bs.pdf);
         }

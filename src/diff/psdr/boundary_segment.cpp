@@ -55,7 +55,95 @@ template <typename V> V line_plane(const V& from, const V& through, const V& p0,
     return from + d * (dot(n, p0 - from) / dot(n, d));
 }
 
+// The source x_S0(θ) of a segment through the moving edge point x_B(θ) with direction ω: a point at infinity
+// (x_B − ω, a directional light's turning with it), a delta light's moving position, a medium vertex moved by the
+// volume motion, or a surface's material point; a surface source within the contact length of the receiver
+// follows the receiver's contact flow (`receiver`: the interior samples x_S0 by a direction from x_D0, so the
+// fixed direction from the receiver's flowed point carries it: MaterialForm::flowed_vertex).
+Vec3<Var> source_position(const MaterialForm& form, const SegmentSource& source, const Vec3<Var>& xb_t,
+                          const Vec3f& dir, const Vec3<Var>* receiver = nullptr) {
+    const Emitter* light = source.emitter && source.emitter->is_delta() ? source.emitter : nullptr;
+    if (source.infinite) return xb_t - (light ? form.light_direction(*light, dir) : Vec3<Var>(dir));
+    if (source.shape) {
+        const SurfaceInteraction3f hit =
+            surface_interaction<float>(*source.shape, source.prim, source.bary, MeshVertices{source.shape->mesh});
+        Var jacobian;
+        return receiver ? form.flowed_vertex(hit, *receiver, jacobian).p : form.vertex(hit).p;
+    }
+    if (light) return form.light_position(*light, source.p);
+    if (source.in_medium) return form.volume_motion().position(source.p, source.medium, nullptr);
+    return Vec3<Var>(source.p);
+}
+
+// How far outside a contact curve its receiver is probed: a few ray offsets.
+float contact_probe(const Vec3f& x) { return 4.f * ray_offset_scale(x); }
+
+// The receiver triangle's moving plane and the segment's velocities relative to the receiver's material point
+// and (image-space first vertex) to the point where the fixed camera ray through x_D0 meets that plane.
+void set_receiver_velocities(const Scene& scene, const MaterialForm& form, BoundarySegment& out) {
+    const SurfaceInteraction3f& recv = out.receiver;
+    const uint32_t* tri = &recv.shape->mesh.indices[3 * size_t(recv.prim_index)];
+    out.plane_point = form.position(*recv.shape, tri[0]);
+    out.plane_normal = cross(form.position(*recv.shape, tri[1]) - out.plane_point,
+                             form.position(*recv.shape, tri[2]) - out.plane_point);
+    out.velocity = out.velocity_relative_to(form, form.vertex(recv).p);
+    if (form.image_space_first_vertex()) {
+        const Vec3f to_camera = scene.sensor->to_sensor(recv.p);
+        out.velocity_seen =
+            out.velocity_relative_to(form, line_plane(Vec3<Var>(recv.p), Vec3<Var>(recv.p + to_camera),
+                                                      out.plane_point, out.plane_normal));
+    } else {
+        out.velocity_seen = out.velocity;
+    }
+}
+
 } // namespace
+
+Contact resting_contact(const Scene& scene, const SceneEdges::SceneEdge& se, const Vec3f& x,
+                        RayCounter& rays) {
+    if (!se.closed || se.edge.f1 < 0) return {};
+    const TriangleMesh& m = se.shape->mesh;
+    const float outward = se.inside_out ? -1.f : 1.f;
+    const Vec3f n[2] = {normalize(face_normal(m, se.edge.f0)) * outward,
+                        normalize(face_normal(m, se.edge.f1)) * outward};
+    const float probe = contact_probe(x);
+    for (int k = 0; k < 2; ++k) {
+        // From outside both faces, a probe along the resting face's normal onto the surface under it.
+        const Vec3f down = n[k], side = n[1 - k];
+        ++rays.rays;
+        const SurfaceInteraction3f hit = scene.intersect(Ray(x + (side - down) * probe, down, 2.f * probe));
+        if (hit.is_valid() && hit.shape != se.shape && hit.bsdf() &&
+            std::abs(dot(normalize(hit.n), down)) > 0.999f)
+            return {hit, side, down * -1.f};
+    }
+    return {};
+}
+
+BoundarySegment contact_segment(const Scene& scene, const MaterialForm& form, const EdgePoint& x_b,
+                                const Contact& contact, const Vec3f& w) {
+    BoundarySegment out;
+    SurfaceInteraction3f recv = contact.surface;
+    // The curve's normal in the receiver's plane, toward the hidden side (from the probe's point to the
+    // curve).
+    const Vec3f e = normalize(x_b.b - x_b.a);
+    Vec3f n = normalize(cross(recv.n, e));
+    if (dot(n, x_b.p - recv.p) < 0.f) n = n * -1.f;
+    recv.wi = recv.to_local(w);
+    out.receiver = recv;
+    out.direction = w * -1.f;
+    out.cos_receiver = std::abs(dot(recv.n, w));
+    out.stretch = 1.f;
+    out.dark_point = x_b.p + n * contact_probe(x_b.p);
+    out.n_dark = n;
+    out.contact = true;
+    const Shape& edge_shape = *x_b.edge->shape;
+    const Vec3<Var> a_t = form.position(edge_shape, x_b.edge->edge.v0),
+                    b_t = form.position(edge_shape, x_b.edge->edge.v1);
+    out.edge_point = a_t + (b_t - a_t) * Var(x_b.tau);
+    set_receiver_velocities(scene, form, out);
+    out.valid = true;
+    return out;
+}
 
 bool grazes(const SceneEdges::SceneEdge& se, const Vec3f& d) {
     const Edge& e = se.edge;
@@ -252,6 +340,23 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext&
         tr = segment_transmittance(scene, to_edge, medium, sampler, rays, &medium);
         if (is_black(tr)) return out;
     }
+    // The side the edge's faces lie on, of the plane Π through the edge and the source (the line source → x
+    // grazes the edge for x on Π; points whose lines pass on the faces' side are behind them).
+    const TriangleMesh& edge_mesh = x_b.edge->shape->mesh;
+    const Vec3f plane_normal = cross(x_b.b - x_b.a, dir);
+    const float faces_side =
+        dot(opposite_vertex(edge_mesh, x_b.edge->edge.f0, x_b.a, x_b.b) - x_b.a, plane_normal);
+    if (faces_side == 0.f) return out;
+
+    // An edge lying on another surface (an object resting on it): the line enters that surface at x_B, which
+    // is then x_D0 (stretch 1), on the contact curve; the hidden side lies under the object.
+    if (const Contact contact = resting_contact(scene, *x_b.edge, x_b.p, rays); contact.valid()) {
+        out = contact_segment(scene, form, x_b, contact, dir * -1.f);
+        out.transmittance = tr;
+        out.medium = medium;
+        out.source = source;
+        return out;
+    }
     const FlightEnd end =
         sample_interaction(scene, Ray(x_b.p + dir * ray_offset_scale(x_b.p), dir), medium, context.volume_endpoints, sampler, rays);
     if (end.kind == FlightEnd::Kind::None || end.kind == FlightEnd::Kind::Escaped) return out;
@@ -261,28 +366,12 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext&
     out.direction = dir;
     const Vec3f x_d = end.p;
 
-    // The side the edge's faces lie on, of the plane Π through the edge and the source (the line source → x
-    // grazes the edge for x on Π; points whose lines pass on the faces' side are behind them).
-    const TriangleMesh& edge_mesh = x_b.edge->shape->mesh;
-    const Vec3f plane_normal = cross(x_b.b - x_b.a, dir);
-    const float faces_side = dot(opposite_vertex(edge_mesh, x_b.edge->edge.f0, x_b.a, x_b.b) - x_b.a, plane_normal);
-    if (faces_side == 0.f) return out;
-
     // The moving edge point and source (a delta light's motion moves the apex, or turns the direction, the
     // shadow is cast from).
     const Shape& edge_shape = *x_b.edge->shape;
     const Vec3<Var> a_t = form.position(edge_shape, x_b.edge->edge.v0), b_t = form.position(edge_shape, x_b.edge->edge.v1);
     const Vec3<Var> xb_t = a_t + (b_t - a_t) * Var(x_b.tau);
-    const Emitter* light = source.emitter && source.emitter->is_delta() ? source.emitter : nullptr;
-    auto source_t = [&] {
-        return source.infinite ? xb_t - (light ? form.light_direction(*light, dir) : Vec3<Var>(dir))
-               : source.shape  ? form.vertex(surface_interaction<float>(*source.shape, source.prim, source.bary,
-                                                                       MeshVertices{source.shape->mesh}))
-                                    .p
-               : light            ? form.light_position(*light, source.p)
-               : source.in_medium ? form.volume_motion().position(source.p, source.medium, nullptr)
-                                  : Vec3<Var>(source.p);
-    };
+    auto source_t = [&] { return source_position(form, source, xb_t, dir); };
 
     if (end.kind == FlightEnd::Kind::Medium) {
         // A medium vertex on the shadow sheet: its area element per dℓ(x_B) dr_D, and the normal of the sheet
@@ -334,21 +423,22 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext&
 
     // Eqs. 47–50: the discontinuity point x_D0(θ) is where the line x_S0(θ) → x_B(θ) meets the receiver's
     // moving plane; its velocity relative to the receiver's material point, along n.
-    const Vec3<Var> src_t = source_t();
-    const Vec3<Var> q0 = form.position(*recv.shape, tri[0]), q1 = form.position(*recv.shape, tri[1]),
-                    q2 = form.position(*recv.shape, tri[2]);
-    const Vec3<Var> n_t = cross(q1 - q0, q2 - q0);
-    const Vec3<Var> xd_t = line_plane(src_t, xb_t, q0, n_t);
-    out.velocity = dot(xd_t - form.vertex(recv).p, Vec3<Var>(n));
-    if (form.image_space_first_vertex()) {
-        // The camera ray through x_D0 (fixed) meets the moving receiver plane at the image-space vertex.
-        const Vec3f to_camera = scene.sensor->to_sensor(x_d);
-        out.velocity_seen = dot(xd_t - line_plane(Vec3<Var>(x_d), Vec3<Var>(x_d + to_camera), q0, n_t), Vec3<Var>(n));
-    } else {
-        out.velocity_seen = out.velocity;
-    }
+    out.edge_point = xb_t;
+    out.n_dark = n;
+    out.source = source;
+    out.source_follows_receiver = source.shape && !source.shape->emitter && form.contact_weight(norm(source.p - x_d)) > 0.f;
+    set_receiver_velocities(scene, form, out);
     out.valid = true;
     return out;
+}
+
+Var BoundarySegment::velocity_relative_to(const MaterialForm& form, const Vec3<Var>& receiver_t) const {
+    if (contact)
+        return dot(form.contact_point(*receiver.shape, receiver.prim_index, edge_point) - receiver_t,
+                   Vec3<Var>(n_dark));
+    const Vec3<Var> src_t = source_position(form, source, edge_point, direction, source_follows_receiver ? &receiver_t : nullptr);
+    const Vec3<Var> xd_t = line_plane(src_t, edge_point, plane_point, plane_normal);
+    return dot(xd_t - receiver_t, Vec3<Var>(n_dark));
 }
 
 } // namespace penumbra

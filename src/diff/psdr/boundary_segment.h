@@ -110,10 +110,46 @@ struct BoundarySegment {
     Var velocity_seen;             // the same relative to the point the fixed camera ray through x_D0 meets on
                                    // the moving receiver: the receiver as an image-space first vertex
 
+    // On a surface receiver, what the velocity relative to any flow of the receiver is computed from: the moving
+    // edge point x_B(θ), the receiver triangle's plane (a point and normal on the tape), the source (a surface
+    // source within the contact length of x_D0 follows the receiver's flow: MaterialForm's contact flow).
+    Vec3<Var> edge_point, plane_point, plane_normal;
+    Vec3f n_dark;
+    SegmentSource source;
+    bool source_follows_receiver = false;
+    // The edge lies on the receiver (an object resting on it): x_D0 is on the contact curve, which moves with
+    // the edge's tangential motion over the receiver (MaterialForm::contact_point), whatever the source.
+    bool contact = false;
+
     // The velocity in the parameterization of the detector vertex at depth t (t = 0: x_D0 itself, connected to
-    // the camera; it is the first path vertex).
+    // the camera; it is the first path vertex), when the receiver's flow is its material point (t > 0) or the
+    // camera ray (t = 0).
     const Var& velocity_at_depth(int t) const { return t == 0 ? velocity_seen : velocity; }
+    // (x_D0(θ) − receiver(θ)) · n_dark for a surface receiver carried by another flow to `receiver` (the contact
+    // flow of its detector subpath).
+    Var velocity_relative_to(const MaterialForm& form, const Vec3<Var>& receiver) const;
 };
+
+// A solid's edge resting on another surface at a point x (one of the edge's faces lies on it, facing it: a
+// box on a floor): the surface under the object is hidden from everywhere, so the surface's integrand jumps
+// along the contact curve, which moves with the object (docs/design.md, "Contacts"). `surface`: the receiving
+// surface hit a few ray offsets outside the curve (its lit side); `rising_normal`: the outward normal of the
+// edge's other face, which rises from the curve.
+struct Contact {
+    SurfaceInteraction3f surface;
+    Vec3f rising_normal;
+    Vec3f up; // the receiver's normal on the object's side
+    bool valid() const { return surface.is_valid(); }
+};
+Contact resting_contact(const Scene& scene, const SceneEdges::SceneEdge& edge, const Vec3f& x,
+                        RayCounter& rays);
+
+// The boundary segment at the contact curve through the edge point x_B, its receiver x_D0 on the contact's
+// lit side with light arriving from direction w (toward its source): stretch 1, velocities of the curve
+// relative to the receiver's flows (MaterialForm::contact_point); the caller sets its source and
+// transmittance.
+BoundarySegment contact_segment(const Scene& scene, const MaterialForm& form, const EdgePoint& x_b,
+                                const Contact& contact, const Vec3f& w);
 
 // What boundary segments are traced with: the motions of surface and medium vertices (the material form and
 // its volume motion), and whether a segment may end in a medium (false: the surface-only boundary segments of a

@@ -63,22 +63,56 @@ bool connect_to_camera(const Scene& scene, const DetectorVertex& v, CameraConnec
     return !is_black(out.weight);
 }
 
+// The position of path vertex k of a detector subpath (chain[0] = x_D0, chain[t] seen by the camera) under the
+// interior's flow: the first path vertex on its camera ray (or its material point), later ones by the contact
+// flow from their predecessor toward the camera (MaterialForm::flowed_vertex; material after a delta lobe).
+Vec3<Var> flowed_position(const Scene& scene, const MaterialForm& form, const std::vector<DetectorVertex>& chain,
+                          const std::vector<bool>& delta, int k, int t) {
+    const SurfaceInteraction3f& si = chain[size_t(k)].si;
+    if (k == t) {
+        if (!form.image_space_first_vertex()) return form.vertex(si).p;
+        const Vec3f to_camera = scene.sensor->to_sensor(si.p);
+        return form.ray_vertex(si, Ray(si.p + to_camera, to_camera * -1.f)).p;
+    }
+    const Vec3f prev = chain[size_t(k + 1)].si.p;
+    if (delta[size_t(k + 1)] || si.shape->emitter || form.contact_weight(norm(si.p - prev)) == 0.f) return form.vertex(si).p;
+    Var jacobian;
+    return form.flowed_vertex(si, flowed_position(scene, form, chain, delta, k + 1, t), jacobian).p;
+}
+
 } // namespace
 
-void detector_connections(const Scene& scene, const BoundarySegment& segment, int t_min, int t_max,
-                          const PathSettings& settings, Sampler& sampler, RayCounter& rays, DetectorConnections& out) {
+void detector_connections(const Scene& scene, const MaterialForm& form, const BoundarySegment& segment, int t_min,
+                          int t_max, const PathSettings& settings, Sampler& sampler, RayCounter& rays,
+                          DetectorConnections& out) {
     const BSDFContext ctx{TransportMode::Importance};
     DetectorVertex v{segment.receiver, segment.direction * -1.f, segment.medium};
     Color3f throughput(1.f);
+    // The subpath's vertices and whether each sampled a delta lobe (for the receiver's contact flow).
+    thread_local std::vector<DetectorVertex> chain;
+    thread_local std::vector<bool> delta;
+    chain.clear();
+    delta.clear();
+    const auto velocity = [&](int t) {
+        if (t == 0 || segment.in_medium || delta[1]) return segment.velocity_at_depth(t);
+        const SurfaceInteraction3f& x_d = chain[0].si;
+        if (x_d.shape->emitter || form.contact_weight(norm(x_d.p - chain[1].si.p)) == 0.f) return segment.velocity;
+        return segment.velocity_relative_to(form, flowed_position(scene, form, chain, delta, 0, t));
+    };
     for (int t = 0; t_max < 0 || t <= t_max; ++t) {
+        chain.push_back(v);
+        delta.push_back(false);
         const BSDF* bsdf = v.si.bsdf();
         if (!v.in_medium() && !bsdf) return;
         if (t >= t_min && (v.in_medium() || bsdf->has(BSDFSmooth))) {
             CameraConnection c;
             if (connect_to_camera(scene, v, c, sampler, rays) &&
-                (t > 0 || camera_sees(scene, segment.dark_point, v.in_medium() ? Vec3f(0.f) : v.si.n, sampler, rays))) {
+                (t > 0 ||
+                 (!segment.contact && camera_sees(scene, segment.dark_point,
+                                                  v.in_medium() ? Vec3f(0.f) : v.si.n, sampler, rays)))) {
                 c.weight *= throughput;
                 c.t = t;
+                c.velocity = velocity(t);
                 out.items[out.count++] = c;
                 if (out.count == DetectorConnections::Capacity) return;
             }
@@ -98,6 +132,7 @@ void detector_connections(const Scene& scene, const BoundarySegment& segment, in
             const auto [bs, weight] = bsdf->sample(ctx, v.si, u1, sampler.next_2d());
             if (is_black(weight)) return;
             d = v.si.to_world(bs.wo);
+            delta.back() = (bs.sampled_type & BSDFDelta) != 0;
             throughput *= weight * adjoint_shading_correction(v.si, d);
             medium = target_medium(*v.si.shape, v.si.n, d, medium);
             ray = v.si.spawn_ray(d);

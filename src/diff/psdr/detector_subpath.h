@@ -22,6 +22,7 @@ struct CameraConnection {
     Vec2f s;        // film position (pixels)
     Color3f weight;
     int t;          // depth of the connected vertex
+    Var velocity;   // the segment's normal velocity relative to the receiver's flow along this subpath
 };
 
 struct DetectorConnections {
@@ -33,9 +34,16 @@ struct DetectorConnections {
 // Connections of the vertices at depths t_min ≤ t ≤ t_max (t_max < 0: unbounded, with Russian roulette
 // from settings.rr_depth; at most Capacity connections), starting at the segment's x_D0 (a surface receiver
 // or a medium vertex). The connection of x_D0 itself also requires the camera to see the segment's
-// `dark_point`, just across the discontinuity: where the discontinuity is also a silhouette seen by the camera
-// (a light at the camera, say), the jump is counted once, by the primary term, instead of twice.
-void detector_connections(const Scene& scene, const BoundarySegment& segment, int t_min, int t_max,
-                          const PathSettings& settings, Sampler& sampler, RayCounter& rays, DetectorConnections& out);
+// `dark_point`, just across the discontinuity: where the discontinuity is also a silhouette seen by the
+// camera (a light at the camera, say), the jump is counted once, by the primary term, instead of twice. A
+// contact segment's x_D0 is never connected directly: seen by the camera, the contact is the primary term's
+// (a silhouette resting on the surface).
+//
+// Each connection carries the segment's velocity relative to the receiver's flow along its subpath: x_D0 as
+// the camera sees it (t = 0), its material point, or, where x_D0 lies within the contact length of the next
+// vertex toward the camera, the contact flow of the chain of vertices back to the camera (MaterialForm).
+void detector_connections(const Scene& scene, const MaterialForm& form, const BoundarySegment& segment, int t_min,
+                          int t_max, const PathSettings& settings, Sampler& sampler, RayCounter& rays,
+                          DetectorConnections& out);
 
 } // namespace penumbra

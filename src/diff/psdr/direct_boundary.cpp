@@ -98,14 +98,14 @@ BoundarySample sample_emitter_boundary(const Scene& scene, const SceneEdges& edg
     const BoundarySegment seg = trace_boundary_segment(scene, context, light, x_b, sampler, rays);
     if (!seg.valid) return out;
     DetectorConnections connections;
-    detector_connections(scene, seg, t_min, t_max, settings, sampler, rays, connections);
+    detector_connections(scene, context.form, seg, t_min, t_max, settings, sampler, rays, connections);
     // The segment's factor: incident term × |cos| at x_D0 × dℓ(x_D0)/dℓ(x_B) (at a medium vertex: × 1 ×
     // dA(x_D0)/(dℓ(x_B) dr_D)) × its transmittance (and free-flight weight), over the edge and light densities.
     const Color3f factor = incident(*emitter, light, seg.receiver.p) * seg.transmittance *
                            (seg.cos_receiver * seg.stretch * shadow_edges.total_length / light_pdf);
     for (int k = 0; k < connections.count; ++k) {
         const CameraConnection& c = connections.items[k];
-        out.add_splat(c.s, factor * c.weight, seg.velocity_at_depth(c.t));
+        out.add_splat(c.s, factor * c.weight, c.velocity);
     }
     return out;
 }

@@ -1,5 +1,7 @@
 #include "diff/psdr/indirect_boundary.h"
 
+#include "core/warp.h"
+
 #include "diff/media_radiance.h"
 #include "diff/media_walk.h"
 #include "diff/psdr/detector_subpath.h"
@@ -41,6 +43,51 @@ Color3f source_radiance(const Scene& scene, const FlightEnd& x_s0, const Vec3f& 
     return vertex_radiance(scene, v, max_depth, false, settings, sampler, rays);
 }
 
+// The light a contact's receiver takes from the face rising from the curve (diff/psdr/boundary_segment.h,
+// Contact): just outside the curve, the face fills the quarter of the receiver's directions on its side, and
+// no line through the edge reaches the receiver from there, so the grazing segments leave that light out. A
+// direction ω toward the face (cosine-weighted about the receiver's normal; the others are the grazing
+// segments'), the radiance arriving along it (emission included: no emitter sample covers it), and the
+// detector subpath from the receiver; seen directly (t = 0) the contact is the primary term's (a silhouette
+// resting on the surface). `weight`: the inverse probability of taking this strategy at the edge point.
+BoundarySample sample_contact_face(const Scene& scene, const SceneEdges& edges, const SegmentContext& context,
+                                   const PathSettings& settings, const EdgePoint& x_b, const Contact& contact,
+                                   float weight, Sampler& sampler, RayCounter& rays) {
+    BoundarySample out;
+    const int t_max = max_detector_depth(settings, 1);
+    if (settings.max_depth >= 0 && t_max < 1) return out;
+    const SurfaceInteraction3f& recv = contact.surface;
+    const Vec3f w = Frame<float>(contact.up).to_world(warp::square_to_cosine_hemisphere(sampler.next_2d()));
+    if (!(dot(w, contact.rising_normal) < 0.f)) return out;
+    const BoundarySegment seg = contact_segment(scene, context.form, x_b, contact, w);
+    DetectorConnections connections;
+    detector_connections(scene, context.form, seg, 1, t_max, settings, sampler, rays, connections);
+    if (connections.count == 0) return out;
+    // |cos| / p(ω) = π, over the edge point's density.
+    const float factor = Pi * edges.all.total_length * weight;
+    const Ray ray = recv.spawn_ray(w);
+    ++rays.rays;
+    const SurfaceInteraction3f source = scene.intersect(ray);
+    Color3f radiance(0.f);
+    int budget_of_radiance = -2;
+    const Sampler source_start = sampler;
+    for (int k = 0; k < connections.count; ++k) {
+        const CameraConnection& c = connections.items[k];
+        const int budget = settings.max_depth < 0 ? -1 : settings.max_depth - (c.t + 1);
+        if (budget != budget_of_radiance) {
+            sampler = source_start;
+            PathSettings arriving = settings;
+            arriving.max_depth = budget;
+            arriving.hide_emitters = false;
+            radiance =
+                trace_path<float>(scene, sampler, ray, source, source, ReferenceGeometry{}, arriving, rays);
+            budget_of_radiance = budget;
+        }
+        if (!is_black(radiance)) out.add_splat(c.s, radiance * c.weight * factor, c.velocity);
+    }
+    return out;
+}
+
 // Algorithm 1 of paper 001: one multi-directional boundary sample, its endpoints drawn by sampleInteraction
 // (surface or medium vertices).
 BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, const SegmentContext& context,
@@ -50,6 +97,17 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
     const int t_max = max_detector_depth(settings, 2);
     if (settings.max_depth >= 0 && t_max < 0) return out;
     const EdgePoint x_b = sample_edge_point(edges, edges.all, index.stratified(sampler));
+    // At a contact, half of the samples take the light from the rising face instead (each strategy counts
+    // twice).
+    float strategy_weight = 1.f;
+    if (!context.media) {
+        if (const Contact contact = resting_contact(scene, *x_b.edge, x_b.p, rays); contact.valid()) {
+            strategy_weight = 2.f;
+            if (sampler.next_1d() < 0.5f)
+                return sample_contact_face(scene, edges, context, settings, x_b, contact, strategy_weight,
+                                           sampler, rays);
+        }
+    }
     Vec3f w_b;
     float pdf_w;
     if (!sample_grazing_direction(*x_b.edge, sampler.next_2d(), w_b, pdf_w)) return out;
@@ -80,7 +138,7 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
     if (!seg.valid) return out;
 
     DetectorConnections connections;
-    detector_connections(scene, seg, 0, t_max, settings, sampler, rays, connections);
+    detector_connections(scene, context.form, seg, 0, t_max, settings, sampler, rays, connections);
     if (connections.count == 0) return out;
 
     // G(x_S0, x_D0) times the Jacobian of Eqs. 40–43 over the density of (x_B, ω_B): for two surface vertices
@@ -89,7 +147,8 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
     // densities of r_S and r_D are in the flights' weights.
     const float r_s2 = squared_norm(x_b.p - x_s0.p), r2 = squared_norm(seg.receiver.p - x_s0.p);
     const Color3f factor =
-        x_s0.weight * seg.transmittance * (seg.cos_receiver * r_s2 * seg.stretch / r2 * edges.all.total_length / pdf_w);
+        x_s0.weight * seg.transmittance *
+        (seg.cos_receiver * r_s2 * seg.stretch / r2 * edges.all.total_length * strategy_weight / pdf_w);
 
     // The source subpath: one estimate per path-length budget the connections need (all from the same
     // random numbers; each is unbiased for its budget).
@@ -104,7 +163,7 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
             radiance = source_radiance(scene, x_s0, seg.receiver.p, context.media, budget, settings, sampler, rays);
             budget_of_radiance = budget;
         }
-        if (!is_black(radiance)) out.add_splat(c.s, radiance * c.weight * factor, seg.velocity_at_depth(c.t));
+        if (!is_black(radiance)) out.add_splat(c.s, radiance * c.weight * factor, c.velocity);
     }
     return out;
 }

@@ -233,7 +233,17 @@ struct EdgeCrossing {
     Ray ray[2];
     SurfaceInteraction3f hit[2];
     Color3f weight[2];
+    // A silhouette lying on another surface (an object resting on it): side 2 is that surface next to the
+    // contact curve (diff/material_form.h, contact_point).
+    bool contact = false;
 };
+
+// Whether the probe's hit lies on a surface through the edge point x (the edge rests on it): the probe
+// passing the edge meets that surface just in front of the edge.
+bool rests_on(const SurfaceInteraction3f& hit, const Shape& edge_shape, const Vec3f& x) {
+    return hit.is_valid() && hit.shape != &edge_shape &&
+           std::abs(dot(x - hit.p, normalize(hit.n))) <= 4.f * ray_offset_scale(x);
+}
 
 // The probes' distance (pixels) from a discontinuity's image at s, seen at world point x, in image direction n
 // (see cross_edge).
@@ -344,7 +354,9 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
         std::swap(sides[0], sides[1]);
         out.n = n2;
     }
-    if (sides[0] != Side::Near || sides[1] != Side::Far) return out;
+    if (sides[0] != Side::Near) return out;
+    out.contact = sides[1] == Side::Front && rests_on(out.hit[1], *se.shape, x_edge);
+    if (sides[1] != Side::Far && !out.contact) return out;
     out.hit[0] = own_face(*se.shape, se.edge, out.tau, out.ray[0], 0.f);
     out.valid = out.hit[0].is_valid();
     return out;
@@ -371,7 +383,7 @@ Color3f seen_radiance(const Scene& scene, const Ray& ray, const SurfaceInteracti
 ArrivingRadiance far_side(const Scene& scene, const EdgeCrossing& c, const PathSettings& settings, Sampler& sampler,
                           RayCounter& rays) {
     const Ray& ray = c.ray[1];
-    const float depth = norm(c.x_edge - ray.o);
+    const float depth = c.contact ? c.hit[1].t * (1.f - 1e-4f) : norm(c.x_edge - ray.o);
     const Medium* medium = sensor_medium(scene);
     const Color3f tr = segment_transmittance(scene, Ray(ray.o, ray.d, depth), medium, sampler, rays, &medium);
     if (is_black(tr)) return {};
@@ -481,10 +493,13 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
     const EdgeCrossing c = cross_edge(scene, se, sil.media, t, sampler, rays);
     if (!c.valid) return out;
 
-    // Velocity of the edge point (a fixed point on the moving edge, Eq. 47 of paper 001) in image space.
+    // Velocity of the edge point (a fixed point on the moving edge, Eq. 47 of paper 001; on a contact, its
+    // motion over the surface it rests on) in image space.
     const Vec3f eye = sensor.to_world.apply_point(Vec3f(0.f));
-    const Vec3<Var> x_e = form.position(*se.shape, se.edge.v0) +
-                          (form.position(*se.shape, se.edge.v1) - form.position(*se.shape, se.edge.v0)) * Var(c.tau);
+    Vec3<Var> x_e =
+        form.position(*se.shape, se.edge.v0) +
+        (form.position(*se.shape, se.edge.v1) - form.position(*se.shape, se.edge.v0)) * Var(c.tau);
+    if (c.contact) x_e = form.contact_point(*c.hit[1].shape, c.hit[1].prim_index, x_e);
     const Vec3<Var> view(Vec3f(0.f, 0.f, 1.f));
     Vec2<Var> s_e, s_b(Var(c.s.x), Var(c.s.y));
     Var j;

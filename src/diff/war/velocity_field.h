@@ -64,7 +64,7 @@ struct WarFieldOptions {
     // ratio, by measurement (docs/war.md): at N' = 8 without it the escaped camera samples of Mitsuba's
     // translate_diffuse_rectangle_constant come out 40% low.
     WarpOptions directions;
-    WarpOptions camera_directions{.aux_count = 32, .sphere_jackknife = true};
+    WarpOptions camera_directions{.weight = {}, .aux_count = 32, .sphere_jackknife = true};
 };
 
 // War's auxiliary streams, apart from was's for the same camera sample.
