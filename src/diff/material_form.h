@@ -133,6 +133,11 @@ inline Vec3<Var> to_reference_light(const Parameters& params, const Emitter& e, 
     return y;
 }
 
+// The foot of x on the plane through p0 with normal n (of any length).
+inline Vec3<Var> foot_on_plane(const Vec3<Var>& x, const Vec3<Var>& p0, const Vec3<Var>& n) {
+    return x - n * (dot(x - p0, n) / dot(n, n));
+}
+
 // The contact length of a scene: vertices within it of their predecessor are carried by the blended flow
 // (docs/design.md, "Contacts").
 float contact_length(const Scene& scene);
@@ -181,8 +186,7 @@ public:
     Vec3<Var> contact_point(const Shape& surface, uint32_t prim, const Vec3<Var>& x) const {
         const uint32_t* i = &surface.mesh.indices[3 * size_t(prim)];
         const Vec3<Var> p0 = position(surface, i[0]);
-        const Vec3<Var> n = cross(position(surface, i[1]) - p0, position(surface, i[2]) - p0);
-        return x - n * (dot(x - p0, n) / dot(n, n));
+        return foot_on_plane(x, p0, cross(position(surface, i[1]) - p0, position(surface, i[2]) - p0));
     }
     // A medium vertex x = X(p, θ) of `medium` with its volume Jacobian dV(x)/dV(p) (Eq. 46).
     Vec3<Var> medium_vertex(const Vec3f& p, const Medium* medium, Var& jacobian) const {

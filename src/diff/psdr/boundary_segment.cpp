@@ -75,9 +75,6 @@ Vec3<Var> source_position(const MaterialForm& form, const SegmentSource& source,
     return Vec3<Var>(source.p);
 }
 
-// How far outside a contact curve its receiver is probed: a few ray offsets.
-float contact_probe(const Vec3f& x) { return 4.f * ray_offset_scale(x); }
-
 // The receiver triangle's moving plane and the segment's velocities relative to the receiver's material point
 // and (image-space first vertex) to the point where the fixed camera ray through x_D0 meets that plane.
 void set_receiver_velocities(const Scene& scene, const MaterialForm& form, BoundarySegment& out) {
@@ -313,8 +310,9 @@ Var sheet_velocity(const Vec3<Var>& src, const Vec3<Var>& a, const Vec3<Var>& b,
 
 } // namespace
 
-BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext& context, const SegmentSource& source,
-                                       const EdgePoint& x_b, Sampler& sampler, RayCounter& rays) {
+BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext& context,
+                                       const SegmentSource& source, const EdgePoint& x_b, Sampler& sampler,
+                                       RayCounter& rays, const std::optional<Contact>& contact) {
     BoundarySegment out;
     const MaterialForm& form = context.form;
     const Vec3f dir = source.infinite ? source.d : normalize(x_b.p - source.p);
@@ -350,8 +348,9 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext&
 
     // An edge lying on another surface (an object resting on it): the line enters that surface at x_B, which
     // is then x_D0 (stretch 1), on the contact curve; the hidden side lies under the object.
-    if (const Contact contact = resting_contact(scene, *x_b.edge, x_b.p, rays); contact.valid()) {
-        out = contact_segment(scene, form, x_b, contact, dir * -1.f);
+    if (const Contact resting = contact ? *contact : resting_contact(scene, *x_b.edge, x_b.p, rays);
+        resting.valid()) {
+        out = contact_segment(scene, form, x_b, resting, dir * -1.f);
         out.transmittance = tr;
         out.medium = medium;
         out.source = source;
@@ -434,8 +433,7 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext&
 
 Var BoundarySegment::velocity_relative_to(const MaterialForm& form, const Vec3<Var>& receiver_t) const {
     if (contact)
-        return dot(form.contact_point(*receiver.shape, receiver.prim_index, edge_point) - receiver_t,
-                   Vec3<Var>(n_dark));
+        return dot(foot_on_plane(edge_point, plane_point, plane_normal) - receiver_t, Vec3<Var>(n_dark));
     const Vec3<Var> src_t = source_position(form, source, edge_point, direction, source_follows_receiver ? &receiver_t : nullptr);
     const Vec3<Var> xd_t = line_plane(src_t, edge_point, plane_point, plane_normal);
     return dot(xd_t - receiver_t, Vec3<Var>(n_dark));

@@ -21,6 +21,8 @@
 #include "diff/material_form.h"
 #include "render/integrator.h"
 
+#include <optional>
+
 namespace penumbra {
 
 // A set of edges sampled by length.
@@ -135,6 +137,10 @@ struct BoundarySegment {
 // along the contact curve, which moves with the object (docs/design.md, "Contacts"). `surface`: the receiving
 // surface hit a few ray offsets outside the curve (its lit side); `rising_normal`: the outward normal of the
 // edge's other face, which rises from the curve.
+// How close to a surface an edge counts as resting on it, and how far outside the contact curve its receiver
+// is probed: a few ray offsets.
+inline float contact_probe(const Vec3f& x) { return 4.f * ray_offset_scale(x); }
+
 struct Contact {
     SurfaceInteraction3f surface;
     Vec3f rising_normal;
@@ -161,11 +167,14 @@ struct SegmentContext {
 };
 
 // Extends source → x_B beyond the edge to the receiver x_D0 (with volume endpoints, a free flight that may
-// end in a medium). Invalid when the edge does not graze the line, the segment source → x_B is blocked, nothing
-// (or no BSDF) lies beyond, the flight is absorbed, or the curve degenerates. The lit side is lit
-// (source → x_B → x_D0 is clear); the occluded side is the one the edge's faces lie on. Records the velocities
-// on the thread's tape; a medium vertex moves by the volume motion.
-BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext& context, const SegmentSource& source,
-                                       const EdgePoint& x_b, Sampler& sampler, RayCounter& rays);
+// end in a medium). Invalid when the edge does not graze the line, the segment source → x_B is blocked,
+// nothing (or no BSDF) lies beyond, the flight is absorbed, or the curve degenerates. The lit side is lit
+// (source → x_B → x_D0 is clear); the occluded side is the one the edge's faces lie on. Records the
+// velocities on the thread's tape; a medium vertex moves by the volume motion. `contact`: the edge point's
+// resting contact if the caller has already probed for it (resting_contact), else probed here.
+BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext& context,
+                                       const SegmentSource& source, const EdgePoint& x_b, Sampler& sampler,
+                                       RayCounter& rays,
+                                       const std::optional<Contact>& contact = std::nullopt);
 
 } // namespace penumbra

@@ -63,6 +63,16 @@ bool connect_to_camera(const Scene& scene, const DetectorVertex& v, CameraConnec
     return !is_black(out.weight);
 }
 
+// Whether path vertex k < t of a detector subpath follows the contact flow from its predecessor toward the
+// camera (MaterialForm::flowed_vertex) rather than its material point: not after a delta lobe, not on an
+// emitter, and within the contact length.
+bool follows_flow(const MaterialForm& form, const std::vector<DetectorVertex>& chain,
+                  const std::vector<bool>& delta, int k) {
+    const SurfaceInteraction3f& si = chain[size_t(k)].si;
+    return !delta[size_t(k + 1)] && !si.shape->emitter &&
+           form.contact_weight(norm(si.p - chain[size_t(k + 1)].si.p)) > 0.f;
+}
+
 // The position of path vertex k of a detector subpath (chain[0] = x_D0, chain[t] seen by the camera) under the
 // interior's flow: the first path vertex on its camera ray (or its material point), later ones by the contact
 // flow from their predecessor toward the camera (MaterialForm::flowed_vertex; material after a delta lobe).
@@ -74,8 +84,7 @@ Vec3<Var> flowed_position(const Scene& scene, const MaterialForm& form, const st
         const Vec3f to_camera = scene.sensor->to_sensor(si.p);
         return form.ray_vertex(si, Ray(si.p + to_camera, to_camera * -1.f)).p;
     }
-    const Vec3f prev = chain[size_t(k + 1)].si.p;
-    if (delta[size_t(k + 1)] || si.shape->emitter || form.contact_weight(norm(si.p - prev)) == 0.f) return form.vertex(si).p;
+    if (!follows_flow(form, chain, delta, k)) return form.vertex(si).p;
     Var jacobian;
     return form.flowed_vertex(si, flowed_position(scene, form, chain, delta, k + 1, t), jacobian).p;
 }
@@ -94,9 +103,8 @@ void detector_connections(const Scene& scene, const MaterialForm& form, const Bo
     chain.clear();
     delta.clear();
     const auto velocity = [&](int t) {
-        if (t == 0 || segment.in_medium || delta[1]) return segment.velocity_at_depth(t);
-        const SurfaceInteraction3f& x_d = chain[0].si;
-        if (x_d.shape->emitter || form.contact_weight(norm(x_d.p - chain[1].si.p)) == 0.f) return segment.velocity;
+        if (t == 0 || segment.in_medium || !follows_flow(form, chain, delta, 0))
+            return segment.velocity_at_depth(t);
         return segment.velocity_relative_to(form, flowed_position(scene, form, chain, delta, 0, t));
     };
     for (int t = 0; t_max < 0 || t <= t_max; ++t) {

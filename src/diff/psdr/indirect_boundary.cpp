@@ -43,6 +43,28 @@ Color3f source_radiance(const Scene& scene, const FlightEnd& x_s0, const Vec3f& 
     return vertex_radiance(scene, v, max_depth, false, settings, sampler, rays);
 }
 
+// Splats the connections' contributions, the radiance arriving at x_D0 from the source side estimated once
+// per path-length budget the connections need (all from the same random numbers; each is unbiased for its
+// budget): `radiance(budget)` with at most `budget` segments counting x_D0 → x_S0 (-1: unbounded).
+template <typename Radiance>
+void splat_with_source_radiance(const DetectorConnections& connections, const Color3f& factor,
+                                const PathSettings& settings, Sampler& sampler, Radiance&& radiance_within,
+                                BoundarySample& out) {
+    Color3f radiance(0.f);
+    int budget_of_radiance = -2;
+    const Sampler source_start = sampler;
+    for (int k = 0; k < connections.count; ++k) {
+        const CameraConnection& c = connections.items[k];
+        const int budget = settings.max_depth < 0 ? -1 : settings.max_depth - (c.t + 1);
+        if (budget != budget_of_radiance) {
+            sampler = source_start;
+            radiance = radiance_within(budget);
+            budget_of_radiance = budget;
+        }
+        if (!is_black(radiance)) out.add_splat(c.s, radiance * c.weight * factor, c.velocity);
+    }
+}
+
 // The light a contact's receiver takes from the face rising from the curve (diff/psdr/boundary_segment.h,
 // Contact): just outside the curve, the face fills the quarter of the receiver's directions on its side, and
 // no line through the edge reaches the receiver from there, so the grazing segments leave that light out. A
@@ -68,23 +90,16 @@ BoundarySample sample_contact_face(const Scene& scene, const SceneEdges& edges, 
     const Ray ray = recv.spawn_ray(w);
     ++rays.rays;
     const SurfaceInteraction3f source = scene.intersect(ray);
-    Color3f radiance(0.f);
-    int budget_of_radiance = -2;
-    const Sampler source_start = sampler;
-    for (int k = 0; k < connections.count; ++k) {
-        const CameraConnection& c = connections.items[k];
-        const int budget = settings.max_depth < 0 ? -1 : settings.max_depth - (c.t + 1);
-        if (budget != budget_of_radiance) {
-            sampler = source_start;
+    splat_with_source_radiance(
+        connections, Color3f(factor), settings, sampler,
+        [&](int budget) {
             PathSettings arriving = settings;
             arriving.max_depth = budget;
             arriving.hide_emitters = false;
-            radiance =
-                trace_path<float>(scene, sampler, ray, source, source, ReferenceGeometry{}, arriving, rays);
-            budget_of_radiance = budget;
-        }
-        if (!is_black(radiance)) out.add_splat(c.s, radiance * c.weight * factor, c.velocity);
-    }
+            return trace_path<float>(scene, sampler, ray, source, source, ReferenceGeometry{}, arriving,
+                                     rays);
+        },
+        out);
     return out;
 }
 
@@ -100,11 +115,13 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
     // At a contact, half of the samples take the light from the rising face instead (each strategy counts
     // twice).
     float strategy_weight = 1.f;
+    std::optional<Contact> contact;
     if (!context.media) {
-        if (const Contact contact = resting_contact(scene, *x_b.edge, x_b.p, rays); contact.valid()) {
+        contact = resting_contact(scene, *x_b.edge, x_b.p, rays);
+        if (contact->valid()) {
             strategy_weight = 2.f;
             if (sampler.next_1d() < 0.5f)
-                return sample_contact_face(scene, edges, context, settings, x_b, contact, strategy_weight,
+                return sample_contact_face(scene, edges, context, settings, x_b, *contact, strategy_weight,
                                            sampler, rays);
         }
     }
@@ -134,7 +151,7 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
     } else if (x_s0.kind != FlightEnd::Kind::Medium) {
         return out;
     }
-    const BoundarySegment seg = trace_boundary_segment(scene, context, source, x_b, sampler, rays);
+    const BoundarySegment seg = trace_boundary_segment(scene, context, source, x_b, sampler, rays, contact);
     if (!seg.valid) return out;
 
     DetectorConnections connections;
@@ -150,21 +167,14 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
         x_s0.weight * seg.transmittance *
         (seg.cos_receiver * r_s2 * seg.stretch / r2 * edges.all.total_length * strategy_weight / pdf_w);
 
-    // The source subpath: one estimate per path-length budget the connections need (all from the same
-    // random numbers; each is unbiased for its budget).
-    Color3f radiance(0.f);
-    int budget_of_radiance = -2;
-    const Sampler source_start = sampler;
-    for (int k = 0; k < connections.count; ++k) {
-        const CameraConnection& c = connections.items[k];
-        const int budget = settings.max_depth < 0 ? -1 : settings.max_depth - (c.t + 1);
-        if (budget != budget_of_radiance) {
-            sampler = source_start;
-            radiance = source_radiance(scene, x_s0, seg.receiver.p, context.media, budget, settings, sampler, rays);
-            budget_of_radiance = budget;
-        }
-        if (!is_black(radiance)) out.add_splat(c.s, radiance * c.weight * factor, c.velocity);
-    }
+    // The source subpath.
+    splat_with_source_radiance(
+        connections, factor, settings, sampler,
+        [&](int budget) {
+            return source_radiance(scene, x_s0, seg.receiver.p, context.media, budget, settings, sampler,
+                                   rays);
+        },
+        out);
     return out;
 }
 

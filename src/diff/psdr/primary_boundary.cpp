@@ -5,6 +5,7 @@
 #include "diff/material_form.h"
 #include "diff/media_radiance.h"
 #include "diff/media_walk.h"
+#include "diff/psdr/boundary_segment.h"
 #include "diff/psdr/shading_terminator.h"
 #include "render/volume_visibility.h"
 #include "scene/texture.h"
@@ -242,7 +243,7 @@ struct EdgeCrossing {
 // passing the edge meets that surface just in front of the edge.
 bool rests_on(const SurfaceInteraction3f& hit, const Shape& edge_shape, const Vec3f& x) {
     return hit.is_valid() && hit.shape != &edge_shape &&
-           std::abs(dot(x - hit.p, normalize(hit.n))) <= 4.f * ray_offset_scale(x);
+           std::abs(dot(x - hit.p, normalize(hit.n))) <= contact_probe(x);
 }
 
 // The probes' distance (pixels) from a discontinuity's image at s, seen at world point x, in image direction n
