@@ -177,6 +177,8 @@ public:
     SurfaceInteraction<Var> flowed_vertex(const SurfaceInteraction3f& hit, const Vec3<Var>& prev, Var& jacobian) const;
     // The blend weight χ(r) of the contact flow at distance r from the predecessor, and dχ/dr.
     float contact_weight(float r, float* derivative = nullptr) const;
+    // Whether any vertex can follow the contact flow (a contact length: not in media).
+    bool has_contact_flow() const { return contact_length_ > 0.f; }
     // A vertex of a shape at X(p, θ).
     Vec3<Var> position(const Shape& shape, uint32_t v) const { return vertices(shape).position(v); }
     // A point of a contact curve: the moving point x(θ) of an edge that lies on the triangle `prim` of

@@ -131,6 +131,7 @@ BoundarySegment contact_segment(const Scene& scene, const MaterialForm& form, co
     out.cos_receiver = std::abs(dot(recv.n, w));
     out.stretch = 1.f;
     out.dark_point = x_b.p + n * contact_probe(x_b.p);
+    out.curve_point = x_b.p;
     out.n_dark = n;
     out.contact = true;
     const Shape& edge_shape = *x_b.edge->shape;
@@ -183,6 +184,30 @@ bool sample_grazing_direction(const SceneEdges::SceneEdge& se, const Vec2f& u, V
     const float z = 2.f * u.y - 1.f, r = std::sqrt(std::max(0.f, 1.f - z * z));
     d = axis * z + (u0 * std::cos(psi) + w * std::sin(psi)) * r;
     pdf = 1.f / (4.f * arc);
+    return true;
+}
+
+bool sample_crease_direction(const SceneEdges::SceneEdge& se, const Vec2f& u, Vec3f& d, float& pdf) {
+    const Edge& e = se.edge;
+    if (e.f1 < 0 || !se.closed || !convex_edge(se)) return false;
+    const TriangleMesh& m = se.shape->mesh;
+    const Vec3f a = m.positions[e.v0], b = m.positions[e.v1];
+    const Vec3f axis = normalize(b - a);
+    auto across = [&](int32_t f) {
+        const Vec3f q = opposite_vertex(m, f, a, b) - a;
+        return normalize(q - axis * dot(q, axis));
+    };
+    // Azimuths about the edge as in sample_grazing_direction; the lines that enter the solid through the edge
+    // leave it toward the mirror image of the wedge, (π, π + wedge) (mirrored for φ1 < 0).
+    const Vec3f u0 = across(e.f0), w = cross(axis, u0), u1 = across(e.f1);
+    const float phi1 = std::atan2(dot(u1, w), dot(u1, u0)), wedge = std::abs(phi1);
+    // A flat edge (wedge π) is no crease.
+    if (!(wedge > 0.f) || !(Pi - wedge > 1e-3f)) return false;
+    float psi = Pi + u.x * wedge;
+    if (phi1 < 0.f) psi = -psi;
+    const float z = 2.f * u.y - 1.f, r = std::sqrt(std::max(0.f, 1.f - z * z));
+    d = axis * z + (u0 * std::cos(psi) + w * std::sin(psi)) * r;
+    pdf = 1.f / (2.f * wedge);
     return true;
 }
 
@@ -316,7 +341,7 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext&
     BoundarySegment out;
     const MaterialForm& form = context.form;
     const Vec3f dir = source.infinite ? source.d : normalize(x_b.p - source.p);
-    if (!grazes(*x_b.edge, dir)) return out;
+    if (!source.crease && !grazes(*x_b.edge, dir)) return out;
     // Where the line through a point starts: the source, or (from infinity) beyond the scene's bounds.
     const BoundingSphere bounds = scene.bounding_sphere();
     auto origin = [&](const Vec3f& through) {
@@ -437,6 +462,18 @@ Var BoundarySegment::velocity_relative_to(const MaterialForm& form, const Vec3<V
     const Vec3<Var> src_t = source_position(form, source, edge_point, direction, source_follows_receiver ? &receiver_t : nullptr);
     const Vec3<Var> xd_t = line_plane(src_t, edge_point, plane_point, plane_normal);
     return dot(xd_t - receiver_t, Vec3<Var>(n_dark));
+}
+
+float BoundarySegment::first_segment_geometry_ratio(const SurfaceInteraction3f& x_d1) const {
+    if (!contact) return 1.f;
+    // |cos φ_1| |cos φ_0| / r² for x_D0 at p, as |(p − x_D1) · n_1| |(p − x_D1) · n_0| / r⁴.
+    const auto geometry = [&](const Vec3f& p) {
+        const Vec3f d = p - x_d1.p;
+        const float r2 = squared_norm(d);
+        return std::abs(dot(d, x_d1.n)) * std::abs(dot(d, receiver.n)) / (r2 * r2);
+    };
+    const float at_probe = geometry(receiver.p);
+    return at_probe > 0.f ? geometry(curve_point) / at_probe : 0.f;
 }
 
 } // namespace penumbra

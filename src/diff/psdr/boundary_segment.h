@@ -77,6 +77,11 @@ bool grazes(const SceneEdges::SceneEdge& edge, const Vec3f& d);
 // along any direction (density 1/4π). False when no direction grazes (a concave edge of a solid).
 bool sample_grazing_direction(const SceneEdges::SceneEdge& edge, const Vec2f& u, Vec3f& d, float& pdf);
 
+// A direction d, uniform over the lines through a convex edge of a solid that leave it there (in front of
+// both faces: from a point on such a line the edge is a crease, not a silhouette), with its solid-angle
+// density: the mirror image of the wedge, of measure 2φ. False for other edges.
+bool sample_crease_direction(const SceneEdges::SceneEdge& edge, const Vec2f& u, Vec3f& d, float& pdf);
+
 // The source endpoint x_S0: a point with its surface normal (zero for point lights) and, when it lies on a
 // shape, its material point (which moves with the shape); or, for directional and environment emitters, a
 // point at infinity: the segment's direction `d` (of travel, away from the emitter).
@@ -95,6 +100,9 @@ struct SegmentSource {
     // transmittance is in the caller's weight, and x_B lies in `edge_medium`.
     bool from_edge = false;
     const Medium* edge_medium = nullptr;
+    // The line enters the edge's solid behind x_B (sample_crease_direction): a crease seen from the receiver,
+    // not a grazing line.
+    bool crease = false;
 };
 
 struct BoundarySegment {
@@ -107,6 +115,7 @@ struct BoundarySegment {
     float stretch = 0.f;           // dℓ(x_D0) / dℓ(x_B); a medium vertex: dA(x_D0) / (dℓ(x_B) dr_D)
     float cos_receiver = 0.f;      // |n(x_D0) · ω| for the segment's direction ω (1 at a medium vertex)
     Vec3f dark_point;              // a point of the receiver just across the curve, on the occluded side
+    Vec3f curve_point;             // a contact's point on the curve itself (x_D0 lies a probe outside it)
     Var velocity;                  // (x_D0(θ) − receiver material point(θ)) · n_dark: its derivative is the
                                    // curve's (or sheet's) normal velocity, n_dark pointing into the occluded side
     Var velocity_seen;             // the same relative to the point the fixed camera ray through x_D0 meets on
@@ -130,6 +139,12 @@ struct BoundarySegment {
     // (x_D0(θ) − receiver(θ)) · n_dark for a surface receiver carried by another flow to `receiver` (the contact
     // flow of its detector subpath).
     Var velocity_relative_to(const MaterialForm& form, const Vec3<Var>& receiver) const;
+    // The geometry term of the detector subpath's first segment x_D1 → x_D0 taken at the contact curve rather
+    // than at the probed receiver, G(x_D1, curve) / G(x_D1, x_D0) (1 for other segments): the boundary
+    // integral is over the curve, which the face rising from it sees edge-on (G = 0); at the probe's offset
+    // that face would take a finite share of the curve's light, concentrated on the pixels of the contact
+    // line.
+    float first_segment_geometry_ratio(const SurfaceInteraction3f& x_d1) const;
 };
 
 // A solid's edge resting on another surface at a point x (one of the edge's faces lies on it, facing it: a

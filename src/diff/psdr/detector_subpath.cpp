@@ -148,6 +148,10 @@ void detector_connections(const Scene& scene, const MaterialForm& form, const Bo
         const FlightEnd end = sample_interaction(scene, ray, medium, true, sampler, rays);
         if (end.kind == FlightEnd::Kind::None || end.kind == FlightEnd::Kind::Escaped) return;
         throughput *= end.weight;
+        if (t == 0 && end.kind == FlightEnd::Kind::Surface) {
+            throughput *= segment.first_segment_geometry_ratio(end.si);
+            if (is_black(throughput)) return;
+        }
         v.si = end.kind == FlightEnd::Kind::Surface ? end.si : SurfaceInteraction3f{};
         if (end.kind == FlightEnd::Kind::Medium) v.si.p = end.p;
         else v.si.wi = v.si.to_local(d * -1.f);

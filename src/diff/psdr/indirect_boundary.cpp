@@ -103,11 +103,163 @@ BoundarySample sample_contact_face(const Scene& scene, const SceneEdges& edges, 
     return out;
 }
 
+// The lit side of the line through x_B along ω_B (Algorithm 1 of paper 001, lines 4–): x_S0 by a free flight
+// behind x_B, the segment on to x_D0, the radiance x_S0 sends along it. Returns the segment (invalid when the
+// line has no source or no receiver).
+BoundarySegment add_lit_side(const Scene& scene, const SegmentContext& context, const PathSettings& settings,
+                             const EdgePoint& x_b, const Vec3f& w_b, float edge_weight, float pdf_w,
+                             const std::optional<Contact>& contact, Sampler& sampler, RayCounter& rays,
+                             BoundarySample& out) {
+    // x_S0 (line 4): a free flight behind x_B along −ω_B, ending at a medium vertex or the first surface.
+    // The medium around x_B: a line grazing an edge passes outside the edge's shape (its exterior medium, if the
+    // shape bounds media; otherwise the medium found by the walk from the sensor).
+    const Shape& edge_shape = *x_b.edge->shape;
+    const Medium* edge_medium = !context.media                              ? nullptr
+                                : edge_shape.interior || edge_shape.exterior ? edge_shape.exterior.get()
+                                                                             : medium_at(scene, x_b.p, rays);
+    const FlightEnd x_s0 = sample_interaction(scene, Ray(x_b.p - w_b * ray_offset_scale(x_b.p), w_b * -1.f), edge_medium,
+                                              context.volume_endpoints, sampler, rays);
+    SegmentSource source{.p = x_s0.p, .n = Vec3f(0.f), .medium = x_s0.medium, .in_medium = true, .from_edge = true,
+                         .edge_medium = edge_medium};
+    if (x_s0.kind == FlightEnd::Kind::Surface) {
+        const SurfaceInteraction3f& si = x_s0.si;
+        if (!si.bsdf() || !si.bsdf()->has(BSDFSmooth)) return {};
+        source.n = si.n;
+        source.shape = si.shape;
+        source.prim = si.prim_index;
+        source.bary = si.bary;
+        source.in_medium = false;
+    } else if (x_s0.kind != FlightEnd::Kind::Medium) {
+        return {};
+    }
+    const BoundarySegment seg = trace_boundary_segment(scene, context, source, x_b, sampler, rays, contact);
+    if (!seg.valid) return seg;
+
+    DetectorConnections connections;
+    detector_connections(scene, context.form, seg, 0, max_detector_depth(settings, 2), settings, sampler,
+                         rays, connections);
+    if (connections.count == 0) return seg;
+
+    // G(x_S0, x_D0) times the Jacobian of Eqs. 40–43 over the density of (x_B, ω_B): for two surface vertices
+    //   |cos φ_S| |cos φ_D| / r² · r_S² / |cos φ_S| · stretch = |cos φ_D| r_S² stretch / r²,
+    // and the same expression for medium vertices (no cosine there, stretch = dA(x_D0)/(dℓ(x_B) dr_D)); the
+    // densities of r_S and r_D are in the flights' weights.
+    const float r_s2 = squared_norm(x_b.p - x_s0.p), r2 = squared_norm(seg.receiver.p - x_s0.p);
+    const Color3f factor =
+        x_s0.weight * seg.transmittance * (seg.cos_receiver * r_s2 * seg.stretch / r2 * edge_weight / pdf_w);
+
+    // The source subpath.
+    splat_with_source_radiance(
+        connections, factor, settings, sampler,
+        [&](int budget) {
+            return source_radiance(scene, x_s0, seg.receiver.p, context.media, budget, settings, sampler,
+                                   rays);
+        },
+        out);
+    return seg;
+}
+
+// The dark side of the same line under the contact flow (docs/design.md, "Contacts"). A vertex y that follows
+// x_D0 by a fixed direction (within the contact length ℓ) sits on the occluder's face just across the line,
+// and that face ends at the edge, which moves relative to the fixed direction: the integrand's jump there,
+// f(x_D0 → x_S0) − f(x_D0 → y), has a dark part the lit side leaves out. With the blended flow
+// V = V_mat + χ (V_att − V_mat) and the edge moving materially, it is
+//   −χ(|x_D0 − x_B|) · L(y → x_D0) · u,
+// u the normal velocity, relative to x_D0's flow, of the fixed-direction line through x_B(θ) on the
+// receiver's plane (the segment from a source at infinity along ω_B). Emitters and media keep the material
+// flow (χ = 0). `lit`: the lit side's segment when it was traced (its receiver rejects most lines cheaply).
+void add_attached_dark_side(const Scene& scene, const SegmentContext& context, const PathSettings& settings,
+                            const EdgePoint& x_b, const Vec3f& w_b, float weight, const BoundarySegment& lit,
+                            Sampler& sampler, RayCounter& rays, BoundarySample& out) {
+    const Shape& occluder = *x_b.edge->shape;
+    if (!context.form.has_contact_flow() || occluder.emitter) return;
+    if (lit.valid &&
+        (lit.contact || lit.in_medium || !(context.form.contact_weight(norm(lit.receiver.p - x_b.p)) > 0.f)))
+        return;
+    const SegmentSource along{.p = x_b.p, .n = Vec3f(0.f), .infinite = true, .d = w_b, .from_edge = true};
+    const BoundarySegment seg = trace_boundary_segment(scene, context, along, x_b, sampler, rays);
+    if (!seg.valid || seg.contact || seg.in_medium) return;
+    const float chi = context.form.contact_weight(norm(seg.receiver.p - x_b.p));
+    if (!(chi > 0.f)) return;
+    // y: where the line from the receiver's dark side back along ω_B meets the occluder, next to x_B.
+    Interaction3f dark;
+    dark.p = seg.dark_point;
+    dark.n = seg.receiver.n;
+    ++rays.rays;
+    const SurfaceInteraction3f y = scene.intersect(dark.spawn_ray(w_b * -1.f));
+    if (!y.is_valid() || y.shape != &occluder || !y.bsdf() || !y.bsdf()->has(BSDFSmooth)) return;
+
+    DetectorConnections connections;
+    detector_connections(scene, context.form, seg, 0, max_detector_depth(settings, 2), settings, sampler,
+                         rays, connections);
+    if (connections.count == 0) return;
+    const Color3f factor = seg.transmittance * (-chi * seg.cos_receiver * seg.stretch * weight);
+    splat_with_source_radiance(
+        connections, factor, settings, sampler,
+        [&](int budget) {
+            return reflected_radiance(scene, y, seg.receiver.p, budget, settings, sampler, rays);
+        },
+        out);
+}
+
+// The point of the edge's shape next to x_B that the line of a segment meets from just beside x_D0 (offset
+// `side`), traced back along the segment: the face a vertex attached to x_D0 lies on, on that side.
+SurfaceInteraction3f attached_face_point(const Scene& scene, const BoundarySegment& seg, const EdgePoint& x_b,
+                                         const Vec3f& side, RayCounter& rays) {
+    Interaction3f from;
+    from.p = seg.receiver.p + side;
+    from.n = seg.receiver.n;
+    ++rays.rays;
+    const SurfaceInteraction3f y = scene.intersect(from.spawn_ray(seg.direction * -1.f));
+    const bool usable = y.is_valid() && y.shape == x_b.edge->shape && y.bsdf() && y.bsdf()->has(BSDFSmooth);
+    return usable ? y : SurfaceInteraction3f{};
+}
+
+// A crease under the contact flow (docs/design.md, "Contacts"). From x_D0 in front of both faces of a convex
+// edge, a vertex attached to x_D0 by a fixed direction passes from one face to the other where the direction
+// meets the edge, and the edge moves relative to the fixed direction; with material vertices the crease is
+// each face's fixed border and adds nothing. The jump is χ(|x_D0 − x_B|) (L(y₁ → x_D0) − L(y₀ → x_D0)), y_k
+// the attached points on the faces on either side, moving at u (as for the dark side): a line through x_B
+// along a direction d that leaves the solid there (sample_crease_direction), the segment from a source at
+// infinity behind it. `weight`: the inverse density of x_B.
+void add_attached_crease(const Scene& scene, const SegmentContext& context, const PathSettings& settings,
+                         const EdgePoint& x_b, float weight, Sampler& sampler, RayCounter& rays,
+                         BoundarySample& out) {
+    if (!context.form.has_contact_flow() || x_b.edge->shape->emitter) return;
+    Vec3f d;
+    float pdf_d;
+    if (!sample_crease_direction(*x_b.edge, sampler.next_2d(), d, pdf_d)) return;
+    const SegmentSource along{
+        .p = x_b.p, .n = Vec3f(0.f), .infinite = true, .d = d, .from_edge = true, .crease = true};
+    const BoundarySegment seg = trace_boundary_segment(scene, context, along, x_b, sampler, rays);
+    if (!seg.valid || seg.contact || seg.in_medium) return;
+    const float chi = context.form.contact_weight(norm(seg.receiver.p - x_b.p));
+    if (!(chi > 0.f)) return;
+    const Vec3f beside = seg.dark_point - seg.receiver.p;
+    const SurfaceInteraction3f y_dark = attached_face_point(scene, seg, x_b, beside, rays),
+                               y_lit = attached_face_point(scene, seg, x_b, beside * -1.f, rays);
+    if (!y_dark.is_valid() || !y_lit.is_valid()) return;
+
+    DetectorConnections connections;
+    detector_connections(scene, context.form, seg, 0, max_detector_depth(settings, 2), settings, sampler,
+                         rays, connections);
+    if (connections.count == 0) return;
+    const Color3f factor = Color3f(chi * seg.cos_receiver * seg.stretch * weight / pdf_d);
+    splat_with_source_radiance(
+        connections, factor, settings, sampler,
+        [&](int budget) {
+            const Color3f lit =
+                reflected_radiance(scene, y_lit, seg.receiver.p, budget, settings, sampler, rays);
+            return lit - reflected_radiance(scene, y_dark, seg.receiver.p, budget, settings, sampler, rays);
+        },
+        out);
+}
+
 // Algorithm 1 of paper 001: one multi-directional boundary sample, its endpoints drawn by sampleInteraction
-// (surface or medium vertices).
+// (surface or medium vertices); under the contact flow also the line's attached dark side.
 BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, const SegmentContext& context,
-                                  const PathSettings& settings, const BoundarySampleIndex& index, Sampler& sampler,
-                                  RayCounter& rays) {
+                                  const PathSettings& settings, const BoundarySampleIndex& index,
+                                  Sampler& sampler, RayCounter& rays) {
     BoundarySample out;
     const int t_max = max_detector_depth(settings, 2);
     if (settings.max_depth >= 0 && t_max < 0) return out;
@@ -128,53 +280,14 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
     Vec3f w_b;
     float pdf_w;
     if (!sample_grazing_direction(*x_b.edge, sampler.next_2d(), w_b, pdf_w)) return out;
-
-    // x_S0 (line 4): a free flight behind x_B along −ω_B, ending at a medium vertex or the first surface.
-    // The medium around x_B: a line grazing an edge passes outside the edge's shape (its exterior medium, if the
-    // shape bounds media; otherwise the medium found by the walk from the sensor).
-    const Shape& edge_shape = *x_b.edge->shape;
-    const Medium* edge_medium = !context.media                              ? nullptr
-                                : edge_shape.interior || edge_shape.exterior ? edge_shape.exterior.get()
-                                                                             : medium_at(scene, x_b.p, rays);
-    const FlightEnd x_s0 = sample_interaction(scene, Ray(x_b.p - w_b * ray_offset_scale(x_b.p), w_b * -1.f), edge_medium,
-                                              context.volume_endpoints, sampler, rays);
-    SegmentSource source{.p = x_s0.p, .n = Vec3f(0.f), .medium = x_s0.medium, .in_medium = true, .from_edge = true,
-                         .edge_medium = edge_medium};
-    if (x_s0.kind == FlightEnd::Kind::Surface) {
-        const SurfaceInteraction3f& si = x_s0.si;
-        if (!si.bsdf() || !si.bsdf()->has(BSDFSmooth)) return out;
-        source.n = si.n;
-        source.shape = si.shape;
-        source.prim = si.prim_index;
-        source.bary = si.bary;
-        source.in_medium = false;
-    } else if (x_s0.kind != FlightEnd::Kind::Medium) {
-        return out;
+    // Over the density of x_B (and that of ω_B).
+    const float edge_weight = edges.all.total_length * strategy_weight;
+    const BoundarySegment lit =
+        add_lit_side(scene, context, settings, x_b, w_b, edge_weight, pdf_w, contact, sampler, rays, out);
+    if (!(contact && contact->valid())) {
+        add_attached_dark_side(scene, context, settings, x_b, w_b, edge_weight / pdf_w, lit, sampler, rays, out);
+        add_attached_crease(scene, context, settings, x_b, edges.all.total_length, sampler, rays, out);
     }
-    const BoundarySegment seg = trace_boundary_segment(scene, context, source, x_b, sampler, rays, contact);
-    if (!seg.valid) return out;
-
-    DetectorConnections connections;
-    detector_connections(scene, context.form, seg, 0, t_max, settings, sampler, rays, connections);
-    if (connections.count == 0) return out;
-
-    // G(x_S0, x_D0) times the Jacobian of Eqs. 40–43 over the density of (x_B, ω_B): for two surface vertices
-    //   |cos φ_S| |cos φ_D| / r² · r_S² / |cos φ_S| · stretch = |cos φ_D| r_S² stretch / r²,
-    // and the same expression for medium vertices (no cosine there, stretch = dA(x_D0)/(dℓ(x_B) dr_D)); the
-    // densities of r_S and r_D are in the flights' weights.
-    const float r_s2 = squared_norm(x_b.p - x_s0.p), r2 = squared_norm(seg.receiver.p - x_s0.p);
-    const Color3f factor =
-        x_s0.weight * seg.transmittance *
-        (seg.cos_receiver * r_s2 * seg.stretch / r2 * edges.all.total_length * strategy_weight / pdf_w);
-
-    // The source subpath.
-    splat_with_source_radiance(
-        connections, factor, settings, sampler,
-        [&](int budget) {
-            return source_radiance(scene, x_s0, seg.receiver.p, context.media, budget, settings, sampler,
-                                   rays);
-        },
-        out);
     return out;
 }
 
