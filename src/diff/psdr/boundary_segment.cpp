@@ -157,6 +157,28 @@ bool grazes(const SceneEdges::SceneEdge& se, const Vec3f& d) {
     return !se.closed || convex_edge(se);
 }
 
+namespace {
+
+// Azimuths about a two-face edge: the edge's axis, u0 across face 0 (azimuth 0), w = axis × u0, and face 1 at
+// azimuth φ1 ∈ (−π, π); the wedge between the faces spans |φ1|.
+struct EdgeAzimuths {
+    Vec3f axis, u0, w;
+    float phi1;
+};
+EdgeAzimuths edge_azimuths(const SceneEdges::SceneEdge& se) {
+    const TriangleMesh& m = se.shape->mesh;
+    const Vec3f a = m.positions[se.edge.v0], b = m.positions[se.edge.v1];
+    const Vec3f axis = normalize(b - a);
+    auto across = [&](int32_t f) {
+        const Vec3f q = opposite_vertex(m, f, a, b) - a;
+        return normalize(q - axis * dot(q, axis));
+    };
+    const Vec3f u0 = across(se.edge.f0), w = cross(axis, u0), u1 = across(se.edge.f1);
+    return {axis, u0, w, std::atan2(dot(u1, w), dot(u1, u0))};
+}
+
+} // namespace
+
 bool sample_grazing_direction(const SceneEdges::SceneEdge& se, const Vec2f& u, Vec3f& d, float& pdf) {
     const Edge& e = se.edge;
     if (e.f1 < 0) {
@@ -164,16 +186,9 @@ bool sample_grazing_direction(const SceneEdges::SceneEdge& se, const Vec2f& u, V
         pdf = warp::square_to_uniform_sphere_pdf();
         return true;
     }
-    const TriangleMesh& m = se.shape->mesh;
-    const Vec3f a = m.positions[e.v0], b = m.positions[e.v1];
-    const Vec3f axis = normalize(b - a);
-    auto across = [&](int32_t f) {
-        const Vec3f q = opposite_vertex(m, f, a, b) - a;
-        return normalize(q - axis * dot(q, axis));
-    };
-    // Azimuths about the edge: face 0 at 0, face 1 at φ1 ∈ (−π, π); the wedge between them spans |φ1|.
-    const Vec3f u0 = across(e.f0), w = cross(axis, u0), u1 = across(e.f1);
-    const float phi1 = std::atan2(dot(u1, w), dot(u1, u0)), wedge = std::abs(phi1);
+    const EdgeAzimuths az = edge_azimuths(se);
+    const Vec3f &axis = az.axis, &u0 = az.u0, &w = az.w;
+    const float phi1 = az.phi1, wedge = std::abs(phi1);
     if (se.closed && !convex_edge(se)) return false; // a concave edge of a solid
     const float arc = Pi - wedge;
     if (!(arc > 0.f)) return false;
@@ -190,17 +205,11 @@ bool sample_grazing_direction(const SceneEdges::SceneEdge& se, const Vec2f& u, V
 bool sample_crease_direction(const SceneEdges::SceneEdge& se, const Vec2f& u, Vec3f& d, float& pdf) {
     const Edge& e = se.edge;
     if (e.f1 < 0 || !se.closed || !convex_edge(se)) return false;
-    const TriangleMesh& m = se.shape->mesh;
-    const Vec3f a = m.positions[e.v0], b = m.positions[e.v1];
-    const Vec3f axis = normalize(b - a);
-    auto across = [&](int32_t f) {
-        const Vec3f q = opposite_vertex(m, f, a, b) - a;
-        return normalize(q - axis * dot(q, axis));
-    };
-    // Azimuths about the edge as in sample_grazing_direction; the lines that enter the solid through the edge
-    // leave it toward the mirror image of the wedge, (π, π + wedge) (mirrored for φ1 < 0).
-    const Vec3f u0 = across(e.f0), w = cross(axis, u0), u1 = across(e.f1);
-    const float phi1 = std::atan2(dot(u1, w), dot(u1, u0)), wedge = std::abs(phi1);
+    // The lines that enter the solid through the edge leave it toward the mirror image of the wedge,
+    // azimuths (π, π + wedge) (mirrored for φ1 < 0).
+    const EdgeAzimuths az = edge_azimuths(se);
+    const Vec3f &axis = az.axis, &u0 = az.u0, &w = az.w;
+    const float phi1 = az.phi1, wedge = std::abs(phi1);
     // A flat edge (wedge π) is no crease.
     if (!(wedge > 0.f) || !(Pi - wedge > 1e-3f)) return false;
     float psi = Pi + u.x * wedge;

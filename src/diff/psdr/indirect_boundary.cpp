@@ -159,6 +159,20 @@ BoundarySegment add_lit_side(const Scene& scene, const SegmentContext& context, 
     return seg;
 }
 
+// The point of the edge's shape next to x_B that the line of a segment meets from `from` (a point of the
+// receiver's plane just beside x_D0), traced back along the segment: the face a vertex attached to x_D0 lies
+// on, on that side (invalid if the line meets something else or a face without a smooth BSDF).
+SurfaceInteraction3f attached_face_point(const Scene& scene, const BoundarySegment& seg, const EdgePoint& x_b,
+                                         const Vec3f& from, RayCounter& rays) {
+    Interaction3f start;
+    start.p = from;
+    start.n = seg.receiver.n;
+    ++rays.rays;
+    const SurfaceInteraction3f y = scene.intersect(start.spawn_ray(seg.direction * -1.f));
+    const bool usable = y.is_valid() && y.shape == x_b.edge->shape && y.bsdf() && y.bsdf()->has(BSDFSmooth);
+    return usable ? y : SurfaceInteraction3f{};
+}
+
 // The dark side of the same line under the contact flow (docs/design.md, "Contacts"). A vertex y that follows
 // x_D0 by a fixed direction (within the contact length ℓ) sits on the occluder's face just across the line,
 // and that face ends at the edge, which moves relative to the fixed direction: the integrand's jump there,
@@ -182,12 +196,8 @@ void add_attached_dark_side(const Scene& scene, const SegmentContext& context, c
     const float chi = context.form.contact_weight(norm(seg.receiver.p - x_b.p));
     if (!(chi > 0.f)) return;
     // y: where the line from the receiver's dark side back along ω_B meets the occluder, next to x_B.
-    Interaction3f dark;
-    dark.p = seg.dark_point;
-    dark.n = seg.receiver.n;
-    ++rays.rays;
-    const SurfaceInteraction3f y = scene.intersect(dark.spawn_ray(w_b * -1.f));
-    if (!y.is_valid() || y.shape != &occluder || !y.bsdf() || !y.bsdf()->has(BSDFSmooth)) return;
+    const SurfaceInteraction3f y = attached_face_point(scene, seg, x_b, seg.dark_point, rays);
+    if (!y.is_valid()) return;
 
     DetectorConnections connections;
     detector_connections(scene, context.form, seg, 0, max_detector_depth(settings, 2), settings, sampler,
@@ -200,19 +210,6 @@ void add_attached_dark_side(const Scene& scene, const SegmentContext& context, c
             return reflected_radiance(scene, y, seg.receiver.p, budget, settings, sampler, rays);
         },
         out);
-}
-
-// The point of the edge's shape next to x_B that the line of a segment meets from just beside x_D0 (offset
-// `side`), traced back along the segment: the face a vertex attached to x_D0 lies on, on that side.
-SurfaceInteraction3f attached_face_point(const Scene& scene, const BoundarySegment& seg, const EdgePoint& x_b,
-                                         const Vec3f& side, RayCounter& rays) {
-    Interaction3f from;
-    from.p = seg.receiver.p + side;
-    from.n = seg.receiver.n;
-    ++rays.rays;
-    const SurfaceInteraction3f y = scene.intersect(from.spawn_ray(seg.direction * -1.f));
-    const bool usable = y.is_valid() && y.shape == x_b.edge->shape && y.bsdf() && y.bsdf()->has(BSDFSmooth);
-    return usable ? y : SurfaceInteraction3f{};
 }
 
 // A crease under the contact flow (docs/design.md, "Contacts"). From x_D0 in front of both faces of a convex
@@ -236,8 +233,8 @@ void add_attached_crease(const Scene& scene, const SegmentContext& context, cons
     const float chi = context.form.contact_weight(norm(seg.receiver.p - x_b.p));
     if (!(chi > 0.f)) return;
     const Vec3f beside = seg.dark_point - seg.receiver.p;
-    const SurfaceInteraction3f y_dark = attached_face_point(scene, seg, x_b, beside, rays),
-                               y_lit = attached_face_point(scene, seg, x_b, beside * -1.f, rays);
+    const SurfaceInteraction3f y_dark = attached_face_point(scene, seg, x_b, seg.receiver.p + beside, rays),
+                               y_lit = attached_face_point(scene, seg, x_b, seg.receiver.p - beside, rays);
     if (!y_dark.is_valid() || !y_lit.is_valid()) return;
 
     DetectorConnections connections;
@@ -256,7 +253,8 @@ void add_attached_crease(const Scene& scene, const SegmentContext& context, cons
 }
 
 // Algorithm 1 of paper 001: one multi-directional boundary sample, its endpoints drawn by sampleInteraction
-// (surface or medium vertices); under the contact flow also the line's attached dark side.
+// (surface or medium vertices); under the contact flow also the line's attached dark side, and a crease line
+// through the same edge point.
 BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, const SegmentContext& context,
                                   const PathSettings& settings, const BoundarySampleIndex& index,
                                   Sampler& sampler, RayCounter& rays) {
