@@ -49,3 +49,21 @@ reference instance_translate_2h 32
 reference instance_vertices 32
 reference instance_vertices_2h 32
 reference rectangle_over_environment 16
+reference contact_slide 32
+reference contact_slide_2h 32
+reference contact_turn 32
+reference contact_turn_2h 32
+reference contact_line 128 max_depth=3 crop_x=40 crop_y=80 crop_width=56 crop_height=16
+reference contact_line_2h 128 max_depth=3 crop_x=40 crop_y=80 crop_width=56 crop_height=16
+reference contact_hover 128 height=0.35 crop_x=40 crop_y=80 crop_width=56 crop_height=16
+reference contact_hover_2h 128 height=0.35 crop_x=40 crop_y=80 crop_width=56 crop_height=16
+reference stack_lower_slide 32
+reference stack_lower_slide_2h 32
+reference stack_lower_turn 32
+reference stack_lower_turn_2h 32
+reference stack_upper_slide 32
+reference stack_upper_slide_2h 32
+reference stack_upper_turn 32
+reference stack_upper_turn_2h 32
+reference stack_ball_slide 32
+reference stack_ball_slide_2h 32
