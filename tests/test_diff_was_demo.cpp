@@ -1,6 +1,6 @@
 // OPTIM-CORKSCREW (paper 004 Fig. 11): `penumbra optimize` with method was recovers the corkscrew's
-// rotation about its axis, mostly from its soft shadow, from each of the bundled initializations
-// (scenes/was/optim_corkscrew_*.json), at reduced size.
+// rotation about its axis, mostly from its soft shadow, from the bundled initializations farthest from the
+// solution (scenes/was/optim_corkscrew_*.json), at reduced size.
 #include "optim/optimize.h"
 
 #include <gtest/gtest.h>
@@ -23,9 +23,10 @@ const std::string was_dir = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/was/";
 // configurations' seed: what N' = 8 leaves, its consistent bias and the last steps' noise). With 80
 // iterations at the same rates −90° stopped at 4.4° and +90° at 0.7° (0.13 s per iteration); at 16 × 16 the
 // shadow covers too few pixels and −90° only gets to −31° in 60 iterations. The configurations themselves at
-// 32 × 32: −45° → 0.003° (120 iterations, N' = 32, 229 s on 2 shared cores).
-TEST(WasDemo, OptimCorkscrewConvergesFromEveryInitialization) {
-    for (const char* init : {"m90", "m45", "p45", "p90"}) {
+// 32 × 32: −45° → 0.003° (120 iterations, N' = 32, 229 s on 2 shared cores). The test starts from ±90° only
+// (the ±45° initializations lie on their way, 36 s each; `penumbra optimize` runs all four configurations).
+TEST(WasDemo, OptimCorkscrewConvergesFromTheFarthestInitializations) {
+    for (const char* init : {"m90", "p90"}) {
         OptimizeConfig config = load_optimize_config(was_dir + "optim_corkscrew_" + init + ".json");
         ASSERT_EQ(config.method, "was");
         config.defines["res"] = "32";
