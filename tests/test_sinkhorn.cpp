@@ -293,3 +293,44 @@ TEST(MatchingLoss, DebiasedMatchingVanishesAtTheTargetAndFollowsAMovedSquare) {
             EXPECT_NEAR(moved.position(i, 0), source.position(i, 0) + 2.0 / 8, 1e-6) << x << "," << y;
         }
 }
+
+// The jackknife over two halves of an image's passes (jackknife_matching_loss): the gradient is w0 g(Î) + w
+// (g(Î1)
+// + g(Î2)) with no 1/passes term, w0 = 2, w = −½ for equal halves, w0 = 1.6, w = −0.3 for 1 + 3 passes
+// (1.6/4 − 0.3 (1 + 1/3) = 0), the value the whole image's; identical halves give the plain matching.
+TEST(MatchingLoss, JackknifeCombinesTheMatchingsOfTheHalves) {
+    Image target(8, 8), first(8, 8), second(8, 8);
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) {
+            const float base = (x >= 3 && x < 5 && y >= 3 && y < 5) ? 0.8f : 0.05f * float(x + y) / 14.f;
+            target.at(x, y) = Color3f(base);
+            first.at(x, y) = Color3f(base * (1.f + 0.3f * std::sin(float(3 * x + y))));
+            second.at(x, y) = Color3f(base * (1.f + 0.3f * std::cos(float(x + 5 * y))));
+        }
+    SinkhornOptions o;
+    o.scaling = 0.5;
+    o.max_iterations = 1;
+    auto expect_combination = [&](int n1, int n2, double w0, double w) {
+        const SplitImage split{first, second, n1, n2};
+        const MatchingLossResult r = jackknife_matching_loss(split, target, o);
+        const MatchingLossResult whole = image_matching_loss(split.whole(), target, o);
+        const MatchingLossResult a = image_matching_loss(first, target, o),
+                                 b = image_matching_loss(second, target, o);
+        EXPECT_NEAR((r.d_position - (w0 * whole.d_position + w * (a.d_position + b.d_position)))
+                        .cwiseAbs()
+                        .maxCoeff(),
+                    0.0, 1e-12);
+        EXPECT_NEAR(
+            (r.d_colour - (w0 * whole.d_colour + w * (a.d_colour + b.d_colour))).cwiseAbs().maxCoeff(), 0.0,
+            1e-12);
+        EXPECT_EQ(r.value, whole.value);
+    };
+    expect_combination(2, 2, 2.0, -0.5);
+    expect_combination(1, 3, 1.6, -0.3);
+    const MatchingLossResult plain = image_matching_loss(first, target, o);
+    const MatchingLossResult same = jackknife_matching_loss({first, first, 4, 4}, target, o);
+    EXPECT_NEAR((same.d_position - plain.d_position).cwiseAbs().maxCoeff(), 0.0, 1e-12);
+    EXPECT_NEAR((same.d_colour - plain.d_colour).cwiseAbs().maxCoeff(), 0.0, 1e-12);
+    EXPECT_THROW(jackknife_matching_loss({first, Image(4, 4), 2, 2}, target, o), Error);
+    EXPECT_THROW(jackknife_matching_loss({first, second, 0, 2}, target, o), Error);
+}

@@ -196,6 +196,38 @@ uint64_t dropped_paths(const tbb::enumerable_thread_specific<ReverseSweep>& swee
     return n;
 }
 
+// The SPPM image of the passes [first, first + count), nothing differentiated.
+Image primal_image(const Scene& scene, const Parameters& params, const DpmOptions& o, int first, int count) {
+    const Film& film = *scene.sensor->film;
+    Image image(film.width, film.height);
+    const float inv = 1.f / float(count);
+    for_each_path(
+        scene, params, o, uint64_t(first), uint64_t(count), nullptr,
+        [&](uint64_t pixel, const Color3f& l) { image.pixels[pixel] += l * inv; }, [](const PathSample&) {},
+        false);
+    return image;
+}
+
+// Whether the matching loss's gradient is jackknifed: by default, with at least two passes to split.
+bool jackknifed(const DpmOptions& o) { return o.matching_jackknife && o.spp >= 2; }
+
+// The matching loss's first run: the primal image (nothing differentiated) and ∂L/∂p, ∂L/∂I of Eq. 25 per
+// pixel, from its debiased matching to the target (Xing et al. 2022; at I = T the pull vanishes). Jackknifed,
+// the passes are rendered as two halves whose own matchings remove the O(1/passes) noise bias of the gradient
+// (diff/dpm/matching_loss.h).
+std::pair<Image, MatchingLossResult> matched_primal(const Scene& scene, const Parameters& params,
+                                                    const DpmOptions& o, const Image& target) {
+    if (!jackknifed(o)) {
+        Image primal = primal_image(scene, params, o, 0, o.spp);
+        MatchingLossResult loss = image_matching_loss(primal, target, o.matching);
+        return {std::move(primal), std::move(loss)};
+    }
+    const int half = o.spp / 2;
+    const SplitImage split{primal_image(scene, params, o, 0, half),
+                           primal_image(scene, params, o, half, o.spp - half), half, o.spp - half};
+    return {split.whole(), jackknife_matching_loss(split, target, o.matching)};
+}
+
 } // namespace
 
 DerivativeImage dpm_derivative(const Scene& scene, const Parameters& params, const DpmOptions& o) {
@@ -292,20 +324,13 @@ Gradient dpm_matching_gradient(const Scene& scene, const Parameters& params, con
     check_options(scene, params, o);
     const Film& film = *scene.sensor->film;
     if (target.width != film.width || target.height != film.height)
-        throw Error("dpm: the target is " + std::to_string(target.width) + "x" + std::to_string(target.height) +
-                    ", the film " + std::to_string(film.width) + "x" + std::to_string(film.height));
-    // First run: the primal image (nothing solved), its pixels matched to the target's (Xing et al. 2022):
-    // ∂L/∂p and ∂L/∂I per pixel (Eq. 25).
+        throw Error("dpm: the target is " + std::to_string(target.width) + "x" +
+                    std::to_string(target.height) + ", the film " + std::to_string(film.width) + "x" +
+                    std::to_string(film.height));
     const float inv = 1.f / float(o.spp);
-    Image primal(film.width, film.height);
-    for_each_path(
-        scene, params, o, 0, uint64_t(o.spp), nullptr,
-        [&](uint64_t pixel, const Color3f& l) { primal.pixels[pixel] += l * inv; }, [](const PathSample&) {},
-        false);
-    // Debiased (diff/dpm/matching_loss.h: at I = T the pull vanishes).
-    const ScreenSamples pixels = image_samples(primal);
-    const ScreenSamples matched = match_image_debiased(primal, target, o.matching);
-    const MatchingLossResult loss = matching_loss(pixels, matched);
+    // A pair, not a structured binding: clang before 16 cannot capture one in the lambda below.
+    const std::pair<Image, MatchingLossResult> matched = matched_primal(scene, params, o, target);
+    const MatchingLossResult& loss = matched.second;
 
     // Second run: each sampled path estimates its pixel's dI/dθ (its value's scale) and dp/dθ (its screen
     // motion, weighted by its share of the pixel's samples: the pixel fraction, paths, EPSMs and passes).
@@ -329,8 +354,10 @@ Gradient dpm_matching_gradient(const Scene& scene, const Parameters& params, con
         });
     Gradient out;
     out.values = total(params, sweeps);
-    out.primal = primal;
-    out.description = describe(o) + ", matching loss";
+    out.primal = matched.first;
+    out.description =
+        describe(o) +
+        (jackknifed(o) ? ", matching loss (jackknife over two halves of the passes)" : ", matching loss");
     out.warnings = settings_warnings(scene);
     out.loss = loss.value;
     out.cost.dropped = dropped_paths(sweeps);

@@ -38,6 +38,10 @@ struct DpmOptions {
     // annealing), as the paper ran it; a 64² gradient took 1.1 s against 4.3 s at scaling 0.9 (two runs on a
     // loaded machine, indicative: docs/dpm.md).
     SinkhornOptions matching{0.01, 0.5, 1.0, 1e-3, 1};
+    // The matching loss's gradient jackknifed over two halves of the passes (diff/dpm/matching_loss.h): at
+    // the egg demo's solution it removes most of the bias of the noisy image's matching (docs/dpm.md), for
+    // three debiased matchings instead of one.
+    bool matching_jackknife = true;
     std::function<void(float)> progress;
 };
 
@@ -59,8 +63,9 @@ Gradient dpm_gradient(const Scene& scene, const Parameters& params, const Image&
 // to pixel to the target by entropic optimal transport on RGB + xy (Xing et al. 2022, 2023), and each pixel
 // is pulled toward its match's position and colour; dL/dθ chains ∂L/∂p and ∂L/∂I with the screen-space motion
 // and the contribution derivatives of the paths sampled in the pixel (DPM-G: averaged over its two EPSMs;
-// DPM-C: contribution only). The passes are traced twice with the same random numbers: once for the image
-// to match, once to differentiate. The gradient's loss is Eq. 25 averaged over the pixels.
+// DPM-C: contribution only). The passes are traced twice, with independent random numbers: once for the image
+// to match (in two halves for the jackknife, `matching_jackknife`), once to differentiate. The gradient's
+// loss is Eq. 25 averaged over the pixels, of the whole image.
 Gradient dpm_matching_gradient(const Scene& scene, const Parameters& params, const Image& target,
                                const DpmOptions& options);
 

@@ -15,6 +15,7 @@ class DpmMethod final : public DerivativeMethod {
         base_.paths = o.get_int("paths", base_.paths);
         base_.matching.scaling = o.get_float("matching-scaling", base_.matching.scaling);
         base_.matching.max_iterations = o.get_int("matching-iterations", base_.matching.max_iterations);
+        base_.matching_jackknife = !o.get_bool("no-matching-jackknife", false);
     }
 
   protected:
@@ -51,19 +52,38 @@ class DpmMethod final : public DerivativeMethod {
 
 std::vector<MethodOption> dpm_options() {
     using Type = MethodOption::Type;
-    return {{"pixel-fraction",
-             Type::Float,
-             "fraction of the pixels that differentiate photon-mapping paths in each pass (default 1; the paper's "
-             "1/16 has 100-300 times the variance x time on the Fig. 6 scene, docs/dpm.md)",
-             {},
-             1e-6,
-             1.0},
-            {"matching-scaling", Type::Float, "Sinkhorn's blur ratio per annealing step for the matching loss (default 0.5, GeomLoss's)", {}, 0.0,
-             0.99},
-            {"matching-iterations", Type::Int, "Sinkhorn iterations at the final blur for the matching loss (default 1: stop after the annealing)", {}, 1,
-             100000},
-            {"paths", Type::Int, "photon-mapping paths differentiated per sampled pixel and pass (default 16, by measurement; the paper: 1)", {}, 1,
-             1024}};
+    return {
+        {"pixel-fraction",
+         Type::Float,
+         "fraction of the pixels that differentiate photon-mapping paths in each pass (default 1; the "
+         "paper's 1/16 has 100-300 times the variance x time on the Fig. 6 scene, docs/dpm.md)",
+         {},
+         1e-6,
+         1.0},
+        {"matching-scaling",
+         Type::Float,
+         "Sinkhorn's blur ratio per annealing step for the matching loss (default 0.5, GeomLoss's)",
+         {},
+         0.0,
+         0.99},
+        {"matching-iterations",
+         Type::Int,
+         "Sinkhorn iterations at the final blur for the matching loss (default 1: stop after the annealing)",
+         {},
+         1,
+         100000},
+        {"no-matching-jackknife",
+         Type::Bool,
+         "the matching loss's gradient from the whole image's matching only, without the jackknife over two "
+         "halves of the passes that removes its O(1/passes) bias (a third of the Sinkhorn time)",
+         {}},
+        {"paths",
+         Type::Int,
+         "photon-mapping paths differentiated per sampled pixel and pass (default 16, by measurement; the "
+         "paper: 1)",
+         {},
+         1,
+         1024}};
 }
 
 } // namespace

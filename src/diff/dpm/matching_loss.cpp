@@ -79,4 +79,33 @@ ScreenSamples match_image_debiased(const Image& image, const Image& target, cons
     return matched;
 }
 
+MatchingLossResult image_matching_loss(const Image& image, const Image& target,
+                                       const SinkhornOptions& options) {
+    return matching_loss(image_samples(image), match_image_debiased(image, target, options));
+}
+
+Image SplitImage::whole() const {
+    if (first.width != second.width || first.height != second.height)
+        throw Error("matching loss: the halves of the image differ in size");
+    if (first_passes <= 0 || second_passes <= 0)
+        throw Error("matching loss: a half of the image has no passes");
+    const float w1 = float(first_passes) / float(first_passes + second_passes), w2 = 1.f - w1;
+    Image out(first.width, first.height);
+    for (size_t i = 0; i < out.pixels.size(); ++i)
+        out.pixels[i] = first.pixels[i] * w1 + second.pixels[i] * w2;
+    return out;
+}
+
+MatchingLossResult jackknife_matching_loss(const SplitImage& image, const Image& target,
+                                           const SinkhornOptions& options) {
+    const double n1 = image.first_passes, n2 = image.second_passes, n = n1 + n2;
+    const double w = -1.0 / (n * (1.0 / n1 + 1.0 / n2) - 2.0), w0 = 1.0 - 2.0 * w;
+    MatchingLossResult r = image_matching_loss(image.whole(), target, options);
+    const MatchingLossResult a = image_matching_loss(image.first, target, options);
+    const MatchingLossResult b = image_matching_loss(image.second, target, options);
+    r.d_position = w0 * r.d_position + w * (a.d_position + b.d_position);
+    r.d_colour = w0 * r.d_colour + w * (a.d_colour + b.d_colour);
+    return r;
+}
+
 } // namespace penumbra

@@ -45,4 +45,26 @@ ScreenSamples match_to_image(const ScreenSamples& samples, const Eigen::VectorXd
 // image = target the match is the pixel itself.
 ScreenSamples match_image_debiased(const Image& image, const Image& target, const SinkhornOptions& options = {});
 
+// Eq. 25 of an image's pixels against their debiased matching (match_image_debiased).
+MatchingLossResult image_matching_loss(const Image& image, const Image& target,
+                                       const SinkhornOptions& options = {});
+
+// An image rendered as two independent groups of passes: `first` the mean of n1 passes, `second` of n2.
+struct SplitImage {
+    Image first, second;
+    int first_passes = 0, second_passes = 0;
+    // The image of all the passes: (n1 Î1 + n2 Î2) / (n1 + n2).
+    Image whole() const;
+};
+
+// The matching loss of a Monte Carlo image with the O(1/passes) bias of its gradient removed: the matching is
+// a nonlinear function of the noisy image, so E[∂L/∂(p, I) at Î] is not ∂L/∂(p, I) at E[Î]. The split-sample
+// (delete-a-group) jackknife [Quenouille 1956] of that gradient over the image's two halves: with
+// E[g(Î_m)] = g(E[Î]) + a/m + O(1/m²) for an image of m passes, w0 g(Î) + w (g(Î1) + g(Î2)), w0 + 2w = 1 and
+// w0/n + w (1/n1 + 1/n2) = 0, has no 1/n term (equal halves: 2 g(Î) − ½ (g(Î1) + g(Î2))). Each half needs its
+// own debiased matching (four more Sinkhorn solves). The gradient is per pixel of the whole image; the value
+// is the whole image's loss.
+MatchingLossResult jackknife_matching_loss(const SplitImage& image, const Image& target,
+                                           const SinkhornOptions& options = {});
+
 } // namespace penumbra
