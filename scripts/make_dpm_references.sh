@@ -2,8 +2,9 @@
 # Regenerates the finite-difference references of the DPM-C validation scenes (scenes/dpm/,
 # docs/dpm-validation.md) in tests/data/dpm/: for every scene a primal render, and for every parameter the
 # central difference (I(θ + h) − I(θ − h)) / 2h with common random numbers (both sides trace the same
-# eye samples and photon streams) and its per-pixel standard error over independent batches. Run from the
-# repository root after building build/penumbra:
+# eye samples and photon streams) and its per-pixel standard error over independent batches; and the egg
+# demo's expected image at its solution, the target of DpmDemos.EggMatchingGradientVanishesAtTheSolution.
+# Run from the repository root after building build/penumbra:
 #     scripts/make_dpm_references.sh
 # The meshes (scenes/dpm/*.obj) are regenerated first; their scripts are deterministic.
 set -euo pipefail
@@ -35,3 +36,8 @@ reference reflector reflector_light_x 'light.translate=1,0,0' 0.005
 primal slab slab_primal
 reference slab slab_thickness 'slab_top.translate=0,1,0' 0.01
 reference slab slab_bulge 'slab_top.deform@0.15,2.2,-0.1=0,1,0' 0.003
+
+# The egg demo at its solution (light height 1.6), 32², 1024 passes of 20,000 photons: the expected image the
+# matching-gradient test matches against (at a fixed radius the expectation does not depend on the photons).
+"$penumbra" render scenes/dpm/egg/scene.xml -D res=32 -D photons=20000 -D radius=0.012 -D light_y=1.6 \
+  --spp 1024 --seed "$seed" -q -o "$out/egg_solution.exr"

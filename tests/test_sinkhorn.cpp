@@ -294,10 +294,10 @@ TEST(MatchingLoss, DebiasedMatchingVanishesAtTheTargetAndFollowsAMovedSquare) {
         }
 }
 
-// The jackknife over two halves of an image's passes (jackknife_matching_loss): the gradient is w0 g(Î) + w
-// (g(Î1)
-// + g(Î2)) with no 1/passes term, w0 = 2, w = −½ for equal halves, w0 = 1.6, w = −0.3 for 1 + 3 passes
-// (1.6/4 − 0.3 (1 + 1/3) = 0), the value the whole image's; identical halves give the plain matching.
+// The jackknife over two halves of an image's passes (jackknife_matching_loss): the gradient is
+// w0 g(Î) + w (g(Î1) + g(Î2)) with no 1/passes term, w0 = 2, w = −½ for equal halves, w0 = 1.6, w = −0.3 for
+// 1 + 3 passes (1.6/4 − 0.3 (1 + 1/3) = 0), the value the whole image's; identical halves give the plain
+// matching.
 TEST(MatchingLoss, JackknifeCombinesTheMatchingsOfTheHalves) {
     Image target(8, 8), first(8, 8), second(8, 8);
     for (int y = 0; y < 8; ++y)
