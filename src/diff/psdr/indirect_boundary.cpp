@@ -284,7 +284,7 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
         add_lit_side(scene, context, settings, x_b, w_b, edge_weight, pdf_w, contact, sampler, rays, out);
     if (!(contact && contact->valid())) {
         add_attached_dark_side(scene, context, settings, x_b, w_b, edge_weight / pdf_w, lit, sampler, rays, out);
-        add_attached_crease(scene, context, settings, x_b, edges.all.total_length, sampler, rays, out);
+        add_attached_crease(scene, context, settings, x_b, edge_weight, sampler, rays, out);
     }
     return out;
 }

@@ -432,29 +432,33 @@ ArrivingRadiance far_side(const Scene& scene, const EdgeCrossing& c, const Ray& 
 // common to both sides, is left out (only the far side beyond the edge's depth, `far`, is estimated; in
 // material form the medium's points in front of the edge are not cut either). A crease's two sides share
 // their random numbers (light samples, BSDF samples), so that their difference is the jump rather than the
-// noise of two estimates. At a contact, the far side is the limit at the curve (probe_contact), its two
-// probes sharing their random numbers too.
+// noise of two estimates. At a contact each side is its limit at the curve (probe_contact).
 Color3f jump(const Scene& scene, const EdgeCrossing& c, bool image_space, bool media, const PathSettings& settings,
              Sampler& sampler, RayCounter& rays, ArrivingRadiance* far = nullptr) {
-    Sampler shared = sampler, twice = sampler;
-    const auto far_radiance = [&](const Ray& ray, const SurfaceInteraction3f& hit, const Color3f& weight,
-                                  Sampler& s, ArrivingRadiance* f) {
+    Sampler shared = sampler;
+    // A side's radiance from its probe k (0: at δ from the curve, 1: at 2δ); at a contact its limit at the
+    // curve, 2 L(δ) − L(2δ), both probes with the same random numbers.
+    const auto side = [&](Sampler& s, const auto& at) {
+        if (!c.contact) return at(0, s);
+        Sampler twice = s;
+        const Color3f once = at(0, s);
+        return once * 2.f - at(1, twice);
+    };
+    const Color3f L_2 = side(sampler, [&](int k, Sampler& s) {
+        const Ray& ray = k == 0 ? c.ray[1] : c.twice_ray;
+        const SurfaceInteraction3f& hit = k == 0 ? c.hit[1] : c.twice_hit[1];
+        const Color3f& weight = k == 0 ? c.weight[1] : c.twice_weight;
         if (!media)
             return trace_path<float>(scene, s, ray, hit, hit, ReferenceGeometry{}, settings, rays) * weight;
         const ArrivingRadiance a = far_side(scene, c, ray, hit, settings, s, rays);
-        if (f) *f = a;
+        if (far && k == 0) *far = a;
         return a.radiance * weight;
-    };
-    Color3f L_2 = far_radiance(c.ray[1], c.hit[1], c.weight[1], sampler, far);
-    if (c.contact)
-        L_2 = L_2 * 2.f - far_radiance(c.twice_ray, c.twice_hit[1], c.twice_weight, twice, nullptr);
+    });
     if (!image_space) return L_2 * -1.f;
-    Sampler& near = c.crease ? shared : sampler;
-    Sampler near_twice = near;
-    Color3f L_1 = seen_radiance(scene, c.ray[0], c.hit[0], media, settings, near, rays) * c.weight[0];
-    if (c.contact)
-        L_1 = L_1 * 2.f -
-              seen_radiance(scene, c.ray[0], c.twice_hit[0], media, settings, near_twice, rays) * c.weight[0];
+    const Color3f L_1 = side(c.crease ? shared : sampler, [&](int k, Sampler& s) {
+        return seen_radiance(scene, c.ray[0], k == 0 ? c.hit[0] : c.twice_hit[0], media, settings, s, rays) *
+               c.weight[0];
+    });
     return L_1 - L_2;
 }
 
