@@ -67,3 +67,10 @@ reference stack_upper_turn 32
 reference stack_upper_turn_2h 32
 reference stack_ball_slide 32
 reference stack_ball_slide_2h 32
+reference mirror_turn 16
+reference mirror_turn_2h 16
+reference mirror_reflectance 16
+reference glass_ball_slide 16
+reference glass_ball_slide_2h 16
+reference mirror_turn_inner 16 crop_x=4 crop_y=6 crop_width=8 crop_height=6
+reference mirror_turn_inner_2h 16 crop_x=4 crop_y=6 crop_width=8 crop_height=6

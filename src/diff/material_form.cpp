@@ -27,6 +27,18 @@ float MaterialForm::contact_weight(float r, float* derivative) const {
     return s * s * (3.f - 2.f * s);
 }
 
+SurfaceInteraction<Var> MaterialForm::ray_vertex(const SurfaceInteraction3f& hit, const Vec3<Var>& o,
+                                                 const Vec3<Var>& d) const {
+    const MovedVertices moved = vertices(*hit.shape);
+    const uint32_t* i = &hit.shape->mesh.indices[3 * size_t(hit.prim_index)];
+    const Vec3<Var> p0 = moved.position(i[0]), e1 = moved.position(i[1]) - p0, e2 = moved.position(i[2]) - p0;
+    const Vec3<Var> s = o - p0, q = cross(d, e2), r = cross(s, e1);
+    const Var inv_det = Var(1.f) / dot(e1, q);
+    const Var b1 = dot(s, q) * inv_det, b2 = dot(d, r) * inv_det;
+    const Vec2<Var> bary(Var(hit.bary.x, b1.id), Var(hit.bary.y, b2.id));
+    return surface_interaction<Var>(*hit.shape, hit.prim_index, bary, moved);
+}
+
 SurfaceInteraction<Var> MaterialForm::flowed_vertex(const SurfaceInteraction3f& hit, const Vec3<Var>& prev,
                                                     Var& jacobian) const {
     const Vec3f x(prev.x.v, prev.y.v, prev.z.v);

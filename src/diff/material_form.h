@@ -156,21 +156,16 @@ public:
     SurfaceInteraction<Var> vertex(const SurfaceInteraction3f& hit) const {
         return surface_interaction<Var>(*hit.shape, hit.prim_index, Vec2<Var>(hit.bary), vertices(*hit.shape));
     }
-    // The point where the fixed ray meets the moving triangle of `hit` (the image-space first vertex): its
-    // barycentrics b(θ) solve o + t d = X(p0) + b1 (X(p1) − X(p0)) + b2 (X(p2) − X(p0)) on the tape
-    // (Möller–Trumbore), so x(θ) slides along the ray with the surface.
+    // The point where the fixed ray meets the moving triangle of `hit` (the image-space first vertex), so
+    // that x(θ) slides along the ray with the surface.
     SurfaceInteraction<Var> ray_vertex(const SurfaceInteraction3f& hit, const Ray& ray) const {
-        const MovedVertices moved = vertices(*hit.shape);
-        const uint32_t* i = &hit.shape->mesh.indices[3 * size_t(hit.prim_index)];
-        const Vec3<Var> p0 = moved.position(i[0]), e1 = moved.position(i[1]) - p0, e2 = moved.position(i[2]) - p0;
-        const Vec3<Var> d(ray.d), s = Vec3<Var>(ray.o) - p0;
-        const Vec3<Var> q = cross(d, e2), r = cross(s, e1);
-        const Var inv_det = Var(1.f) / dot(e1, q);
-        // Values from the reference hit (Embree's), derivatives from the solve.
-        const Var b1 = dot(s, q) * inv_det, b2 = dot(d, r) * inv_det;
-        const Vec2<Var> bary(Var(hit.bary.x, b1.id), Var(hit.bary.y, b2.id));
-        return surface_interaction<Var>(*hit.shape, hit.prim_index, bary, moved);
+        return ray_vertex(hit, Vec3<Var>(ray.o), Vec3<Var>(ray.d));
     }
+    // The point where the ray o(θ) + t d(θ) meets the moving triangle of `hit` (the vertex after a delta
+    // lobe: o the lobe's vertex, d its direction): its barycentrics b(θ) solve o + t d = X(p0) + b1 (X(p1) −
+    // X(p0)) + b2 (X(p2) − X(p0)) on the tape (Möller–Trumbore); values from the reference hit.
+    SurfaceInteraction<Var> ray_vertex(const SurfaceInteraction3f& hit, const Vec3<Var>& o,
+                                       const Vec3<Var>& d) const;
     // The vertex `hit`, reached by a BSDF sample from the vertex at `prev` (its position on the tape), under the
     // contact flow, with its relative area Jacobian (value 1): the material vertex and J(p) unless `hit` lies
     // within the contact length of `prev` on a shape that emits nothing.

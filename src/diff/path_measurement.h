@@ -60,15 +60,47 @@ MeasuredVertex<T> measured_vertex(const PathVertex& v, const Geometry& geometry)
 }
 
 // The scattering function at v from its camera-side neighbor toward the light side (radiance transport);
-// delta lobes are constants.
+// at a delta lobe its smooth factor g (scene/bsdf.h delta_weight).
 template <typename T>
 Color3<T> measured_scattering(const MeasuredVertex<T>& v, const Vec3<T>& camera_side, const Vec3<T>& wo) {
-    if (v.ref->delta) return Color3<T>(T(1.f));
     const Vec3<T> wi = normalize(camera_side - v.p);
     if (!v.surface) return Color3<T>(v.ref->medium->phase->template eval<T>(wi, wo));
     SurfaceInteraction<T> si = v.si;
     si.wi = si.to_local(wi);
-    return v.ref->si.bsdf()->eval(BSDFContext{TransportMode::Radiance}, si, si.to_local(wo));
+    const BSDFContext ctx{TransportMode::Radiance};
+    if (v.ref->delta) return v.ref->si.bsdf()->delta_weight(ctx, si, si.to_local(wo));
+    return v.ref->si.bsdf()->eval(ctx, si, si.to_local(wo));
+}
+
+// The vertex b after a delta lobe at the surface vertex a (reached from `from`): where the lobe's direction
+// from a(θ) (render/path_tracer.h delta_step) meets b's moving surface, at b's free-flight distance in a
+// medium, or that direction itself for an escaped b; no area integral at b (J = 1).
+template <typename Geometry>
+MeasuredVertex<Var> steered_vertex(const PathVertex& b, const MeasuredVertex<Var>& a, const Vec3<Var>& from,
+                                   const Geometry& geometry) {
+    const SurfaceInteraction3f& hit = a.ref->si;
+    const Vec3f wo0 = b.infinite ? b.d_env : normalize(b.p - a.ref->p);
+    BSDFSample bs;
+    bs.wo = hit.to_local(wo0);
+    bs.eta = a.ref->eta;
+    bs.sampled_type = hit.wi.z * bs.wo.z > 0.f ? BSDFDeltaReflection
+                      : bs.eta == 1.f          ? BSDFNull
+                                               : BSDFDeltaTransmission;
+    SurfaceInteraction<Var> si = a.si;
+    si.wi = si.to_local(normalize(from - a.p));
+    const Vec3<Var> d = si.to_world(delta_direction(si.wi, hit.wi, bs));
+    MeasuredVertex<Var> m = escaped_vertex(b, a.p, Vec3f(0.f));
+    m.p = a.p + d;
+    if (b.infinite) return m;
+    m.infinite = false;
+    if (b.type == VertexType::Medium) {
+        m.p = a.p + d * Var(norm(b.p - a.ref->p));
+        return m;
+    }
+    m.si = geometry.ray_vertex(b.si, a.p, d);
+    m.p = m.si.p;
+    m.surface = true;
+    return m;
 }
 
 // G' of the light-side end b of a segment a → b: |cos θ_b| / ℓ² (surface) or 1 / ℓ² (medium); 1 toward a
@@ -150,9 +182,11 @@ Color3<T> path_measurement(const StrategyRecord& st, const std::vector<MeasuredV
     if (st.s == 0) {
         if (zt.infinite) {
             Color3<T> L(T(0.f));
+            // Along z_{t−1} − z_{t−2}: d_env, turned by a delta lobe before it.
+            const Vec3<T> turn = zt.p - camera_side - Vec3<T>(zt.ref->d_env);
             for (const auto& e : scene.emitters)
                 if (e->is_infinite() && !e->is_delta())
-                    L += e->eval_environment(geometry.direction_to_reference_light(*e, zt.ref->d_env));
+                    L += e->eval_environment(geometry.direction_to_reference_light(*e, zt.ref->d_env) + turn);
             return head * L;
         }
         SurfaceInteraction<T> si = zt.si;

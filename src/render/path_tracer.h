@@ -106,6 +106,18 @@ Color3<T> next_event_contribution(const BSDFContext& ctx, const BSDF* bsdf, cons
     return bsdf->eval(ctx, si, si.to_local(c.wo)) * c.value;
 }
 
+// A step through the delta lobe sampled in `bs` at x (T = Var: `si` on the tape with its wi set): the lobe
+// fixes the direction given the incident one (its half vector stays in the shading frame, scene/bsdf.h
+// delta_direction), so the direction turns with the geometry, and its smooth factor g (Fresnel) follows the
+// angles: multiplies the throughput by g / p and returns the world direction.
+template <typename T>
+Vec3<T> delta_step(const BSDF& bsdf, const SurfaceInteraction3f& hit, const SurfaceInteraction<T>& si,
+                   const BSDFSample& bs, Color3<T>& throughput) {
+    const Vec3<T> wo = delta_direction(si.wi, hit.wi, bs);
+    throughput *= bsdf.delta_weight(BSDFContext{TransportMode::Radiance}, si, wo) / T(bs.pdf);
+    return si.to_world(wo);
+}
+
 // A vertex rule of trace_path: how each vertex of a path sampled in the reference configuration is placed in T,
 // and what each contribution carries there. Rules are per path (they may keep the path's state):
 //   SurfaceInteraction<T> arrive(hit, prev)   the vertex `hit`, reached by BSDF sampling from `prev`, in T with
@@ -198,6 +210,7 @@ template <typename T, typename Geometry> struct GeometryRule {
     const Geometry& geometry;
     SurfaceInteraction<T> next{}; // the vertex scatter() placed, which arrive() returns
     bool placed = false;
+    Vec3<T> steered{}; // the direction scatter() left along (a delta lobe's turns with the geometry)
 
     SurfaceInteraction<T> arrive(const SurfaceInteraction3f& hit, const SurfaceInteraction<T>& prev) {
         SurfaceInteraction<T> si = placed ? next : geometry.vertex(hit);
@@ -210,7 +223,10 @@ template <typename T, typename Geometry> struct GeometryRule {
     Color3<T> emitted(const Emitter& e, const Color3f& Le, const SurfaceInteraction3f& hit,
                       const SurfaceInteraction<T>& si, const Vec3f& d) const {
         if constexpr (reference) return Le;
-        else return hit.is_valid() ? e.eval(si) : e.eval_environment(geometry.direction_to_reference_light(e, d));
+        else
+            return hit.is_valid() ? e.eval(si)
+                                  : e.eval_environment(geometry.direction_to_reference_light(e, d) +
+                                                       (steered - Vec3<T>(d)));
     }
 
     Color3<T> next_event(const BSDF& bsdf, const SurfaceInteraction3f&, const SurfaceInteraction<T>& si,
@@ -221,18 +237,23 @@ template <typename T, typename Geometry> struct GeometryRule {
         else return next_event_contribution(ctx, &bsdf, si, ds, geometry);
     }
 
-    void scatter(const BSDF& bsdf, const SurfaceInteraction3f&, const SurfaceInteraction<T>& si,
-                 const BSDFSample& bs, const Color3f& weight, const Vec3f& d, const SurfaceInteraction3f& next_hit,
-                 bool delta, Color3<T>& throughput, RayCounter&) {
+    void scatter(const BSDF& bsdf, const SurfaceInteraction3f& hit, const SurfaceInteraction<T>& si,
+                 const BSDFSample& bs, const Color3f& weight, const Vec3f& d,
+                 const SurfaceInteraction3f& next_hit, bool delta, Color3<T>& throughput, RayCounter&) {
+        steered = Vec3<T>(d);
         using std::abs;
         using std::sqrt;
         const BSDFContext ctx{TransportMode::Radiance};
         if constexpr (reference) {
             throughput *= Color3<T>(weight); // weight = f/p
         } else if (delta) {
-            // Delta lobes fix the direction (the paper's assumption A.1 excludes them: no derivative flows
-            // through them).
-            throughput *= Color3<T>(weight);
+            // No area integral after a delta lobe (G' and J left out): the next vertex is where its direction
+            // from x(θ) meets the moving surface.
+            steered = delta_step(bsdf, hit, si, bs, throughput);
+            if (next_hit.is_valid()) {
+                next = geometry.ray_vertex(next_hit, si.p, steered);
+                placed = true;
+            }
         } else if (next_hit.is_valid()) {
             T jacobian;
             next = geometry.flowed_vertex(next_hit, si.p, jacobian);

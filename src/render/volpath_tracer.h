@@ -227,6 +227,9 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
         float dir_pdf;
         bool delta = false, null = false;
         Color3f sampled_weight(1.f); // f/p in the reference configuration
+        // After a delta lobe, its direction and smooth factor g / p on the tape (as render/path_tracer.h).
+        Vec3<T> steered;
+        Color3<T> delta_weight(T(1));
         if (v.surface) {
             const float u1 = sampler.next_1d();
             const auto [bs, bsdf_weight] = bsdf->sample(ctx, v.hit, u1, sampler.next_2d());
@@ -238,6 +241,13 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
             delta = (bs.sampled_type & BSDFDelta) != 0;
             sampled_weight = bsdf_weight;
             eta *= bs.eta;
+            if constexpr (!reference) {
+                if (delta) {
+                    SurfaceInteraction<T> here = v.si;
+                    here.wi = here.to_local(wi);
+                    steered = delta_step(*bsdf, v.hit, here, bs, delta_weight);
+                }
+            }
         } else {
             const auto [wo, pdf] = v.medium->phase->sample(v.wi0, sampler.next_2d());
             if (!(pdf > 0.f)) break;
@@ -275,7 +285,14 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
             x = end.kind == ChainEnd::Kind::Surface ? v.hit.p : end.p;
         } else {
             T measure(1.f);
-            if (end.kind == ChainEnd::Kind::Surface) {
+            if (delta && end.kind == ChainEnd::Kind::Surface) {
+                // No area integral after a delta lobe: the vertex where its direction meets the surface.
+                next_si = geometry.ray_vertex(v.hit, v.p, steered);
+                x = next_si.p;
+                next_si.wi = next_si.to_local(-steered);
+            } else if (delta && end.kind == ChainEnd::Kind::Medium) {
+                x = v.p + steered * T(norm(end.p - v.p0)); // at its free-flight distance along the direction
+            } else if (end.kind == ChainEnd::Kind::Surface) {
                 next_si = geometry.vertex(v.hit);
                 x = next_si.p;
                 const Vec3<T> to = x - v.p;
@@ -289,8 +306,8 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
                 measure = relative_change(jacobian / squared_norm(x - v.p));
             }
             const bool escaped = end.kind == ChainEnd::Kind::Escaped;
-            const Vec3<T> wo = escaped ? Vec3<T>(d) : normalize(x - v.p);
-            const Color3<T> f = delta ? Color3<T>(sampled_weight) : f_of(wo) / T(dir_pdf);
+            const Vec3<T> wo = delta ? steered : escaped ? Vec3<T>(d) : normalize(x - v.p);
+            const Color3<T> f = delta ? delta_weight : f_of(wo) / T(dir_pdf);
             step = f *
                    chain_weight(*chain, v.p, escaped ? v.p + wo : x, true, end.kind == ChainEnd::Kind::Medium,
                                 escaped, geometry) *
@@ -308,7 +325,8 @@ Color3<T> trace_volpath_from(const Scene& scene, Sampler& sampler, VolVertex<T> 
                         const Color3<T> le =
                             end.kind == ChainEnd::Kind::Surface
                                 ? e->eval(next_si)
-                                : e->eval_environment(geometry.direction_to_reference_light(*e, d));
+                                : e->eval_environment(geometry.direction_to_reference_light(*e, d) +
+                                                      (delta ? steered - Vec3<T>(d) : Vec3<T>(T(0))));
                         L += throughput * step * le * T(w / mean_ratio / q);
                     }
                 });

@@ -104,6 +104,26 @@ inline SurfaceInteraction<Var> constant_interaction(const SurfaceInteraction3f& 
     return v;
 }
 
+// The direction of the delta lobe sampled in `bs` (at the reference incident direction wi0, local) for the
+// incident direction wi (local, on the tape): the lobe keeps its generalized half vector h ∝ wi0 + η wo0
+// fixed in the shading frame (paper 003 Eq. 3; η = bs.eta across a refraction, 1 for a reflection), so
+//   reflection  wo = 2 (wi · h) h − wi,
+//   refraction  wo = h (c η_ti + cos θ_t) − wi η_ti,  c = wi · h, η_ti = 1/η, cos θ_t = −sign(c) √(1 − η_ti²
+//   (1 − c²)), null        wo = −wi (the ray goes on).
+template <typename T> Vec3<T> delta_direction(const Vec3<T>& wi, const Vec3f& wi0, const BSDFSample& bs) {
+    const bool reflection = (bs.sampled_type & BSDFDeltaReflection) != 0;
+    const float eta = reflection ? 1.f : bs.eta;
+    const Vec3f sum = wi0 + bs.wo * eta;
+    if (!reflection && squared_norm(sum) < 1e-10f) return -wi;
+    const Vec3<T> h(normalize(sum));
+    const T c = dot(wi, h);
+    if (reflection) return h * (T(2) * c) - wi;
+    const T eta_ti = T(1.f / eta);
+    const T cos_t2 = T(1) - eta_ti * eta_ti * (T(1) - c * c);
+    const T cos_t = detach(c) >= 0.f ? -safe_sqrt(cos_t2) : safe_sqrt(cos_t2);
+    return h * (c * eta_ti + cos_t) - wi * eta_ti;
+}
+
 // CRTP helper: a BSDF implements `template <typename T> Color3<T> eval_t(ctx, si, wo) const` and `pdf_t`, and a
 // BSDF with delta lobes `delta_weight_t` (without one, delta_weight() is zero).
 template <typename Derived> class BSDFBase : public BSDF {

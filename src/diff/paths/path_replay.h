@@ -165,17 +165,17 @@ Vec3d sample_path(const Scene& scene, Sampler& sampler, const Ray& primary, cons
         mis.advance(q, ratio); // Algorithm 1, lines 14-15
 
         if constexpr (adjoint) {
-            // Algorithm 1, line 29: BACKWARDGRAD(f, δL · L / f), L now being what arrives through bs.wo. No
-            // derivative flows through delta lobes (as in the interior estimator).
-            if (!delta_lobe) {
-                tape.clear();
-                SurfaceInteraction<Var> si = constant_interaction(hit);
-                const Color3<Var> fv = bsdf->eval(ctx, si, Vec3<Var>(bs.wo));
-                if (detail::depends_on_parameters(fv)) {
-                    const Vec3d f(fv.x.v, fv.y.v, fv.z.v);
-                    const Vec3d w(f.x != 0.0 ? L.x / f.x : 0.0, f.y != 0.0 ? L.y / f.y : 0.0, f.z != 0.0 ? L.z / f.z : 0.0);
-                    sink(fv, w * scale);
-                }
+            // Algorithm 1, line 29: BACKWARDGRAD(f, δL · L / f), L now being what arrives through bs.wo; at a
+            // delta lobe f is its smooth factor g (scene/bsdf.h delta_weight: Fresnel times reflectance).
+            tape.clear();
+            SurfaceInteraction<Var> si = constant_interaction(hit);
+            const Color3<Var> fv = delta_lobe ? bsdf->delta_weight(ctx, si, Vec3<Var>(bs.wo))
+                                              : bsdf->eval(ctx, si, Vec3<Var>(bs.wo));
+            if (detail::depends_on_parameters(fv)) {
+                const Vec3d f(fv.x.v, fv.y.v, fv.z.v);
+                const Vec3d w(f.x != 0.0 ? L.x / f.x : 0.0, f.y != 0.0 ? L.y / f.y : 0.0,
+                              f.z != 0.0 ? L.z / f.z : 0.0);
+                sink(fv, w * scale);
             }
         }
 

@@ -13,12 +13,12 @@
 // options.adaptive. Same seed ⇒ same result for any thread count.
 //
 // Which parameter drives the differential density at a vertex: the BSDF decides (BSDF::has_differential_lobe;
-// a rough conductor: its isotropic α; a blend: its weight, else its first child with a lobe). The estimator is
-// unbiased for every enabled parameter whatever the density: p_∂f only changes which paths are drawn, and the
-// MIS mixture density is a true density of the drawn paths.
-// Limits: geometric parameters (motions, vertex_positions) are rejected (use the interior / psdr estimators);
-// no derivative flows through delta lobes; at a vertex where a channel of f vanishes but not its derivative
-// (e.g. a reflectance of exactly 0), PRB's division by f loses that channel's contribution.
+// a rough conductor: its isotropic α; a blend: its weight, else its first child with a lobe). The estimator
+// is unbiased for every enabled parameter whatever the density: p_∂f only changes which paths are drawn, and
+// the MIS mixture density is a true density of the drawn paths. Limits: geometric parameters (motions,
+// vertex_positions) are rejected (use the interior / psdr estimators); at a vertex where a channel of f
+// vanishes but not its derivative (e.g. a reflectance of exactly 0), PRB's division by f loses that channel's
+// contribution.
 #pragma once
 #include "core/image_loss.h"
 #include "diff/parameters.h"

@@ -106,18 +106,22 @@ Color3<Var> bidirectional_camera_path(const BDPTPass& pass, const MaterialForm& 
         first_vertex(form, camera_path[1], record.camera[1], ray, o, camera, escaped_weight, camera_factor));
     for (size_t k = 2; k < camera_path.size(); ++k) {
         const PathVertex& v = camera_path[k];
-        if (v.infinite) {
+        if (camera_path[k - 1].delta)
+            z.push_back(steered_vertex(v, z[k - 1], k == 2 ? o : z[k - 2].p, form));
+        else if (v.infinite)
             z.push_back(escaped_vertex(v, z.back().p, v.d_env));
-        } else {
+        else
             z.push_back(measured_vertex<Var>(v, form));
-        }
     }
     camera_prefix(z, o, record, form, camera_factors);
 
     // The light subpath on the geometry.
     y.clear();
-    for (const PathVertex& v : sample.light)
-        y.push_back(measured_vertex<Var>(v, form));
+    for (size_t j = 0; j < sample.light.size(); ++j) {
+        const PathVertex& v = sample.light[j];
+        y.push_back(j >= 2 && sample.light[j - 1].delta ? steered_vertex(v, y[j - 1], y[j - 2].p, form)
+                                                        : measured_vertex<Var>(v, form));
+    }
     light_prefix(y, record, form, light_factors);
 
     const Color3<Var> L = reweighted_strategies(record, [&](const StrategyRecord& st) {

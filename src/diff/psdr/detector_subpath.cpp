@@ -63,30 +63,42 @@ bool connect_to_camera(const Scene& scene, const DetectorVertex& v, CameraConnec
     return !is_black(out.weight);
 }
 
-// Whether path vertex k < t of a detector subpath follows the contact flow from its predecessor toward the
-// camera (MaterialForm::flowed_vertex) rather than its material point: not after a delta lobe, not on an
-// emitter, and within the contact length.
+// Whether path vertex k < t of a detector subpath is carried from its predecessor toward the camera (as the
+// interior's path walk carries it) rather than being its material point: after a delta lobe there (along the
+// lobe's direction), or by the contact flow (MaterialForm::flowed_vertex) off emitters within the contact
+// length.
 bool follows_flow(const MaterialForm& form, const std::vector<DetectorVertex>& chain,
-                  const std::vector<bool>& delta, int k) {
+                  const std::vector<BSDFSample>& lobes, int k) {
+    if (lobes[size_t(k + 1)].sampled_type & BSDFDelta) return true;
     const SurfaceInteraction3f& si = chain[size_t(k)].si;
-    return !delta[size_t(k + 1)] && !si.shape->emitter &&
-           form.contact_weight(norm(si.p - chain[size_t(k + 1)].si.p)) > 0.f;
+    return !si.shape->emitter && form.contact_weight(norm(si.p - chain[size_t(k + 1)].si.p)) > 0.f;
 }
 
-// The position of path vertex k of a detector subpath (chain[0] = x_D0, chain[t] seen by the camera) under the
-// interior's flow: the first path vertex on its camera ray (or its material point), later ones by the contact
-// flow from their predecessor toward the camera (MaterialForm::flowed_vertex; material after a delta lobe).
-Vec3<Var> flowed_position(const Scene& scene, const MaterialForm& form, const std::vector<DetectorVertex>& chain,
-                          const std::vector<bool>& delta, int k, int t) {
+// Path vertex k of a detector subpath (chain[0] = x_D0, chain[t] seen by the camera; surfaces) under the
+// interior's flow: the first path vertex on its camera ray (or its material point), later ones carried from
+// their predecessor toward the camera: along its delta lobe (the detector walk sampled it the other way: the
+// lobe's reference directions swap and its relative index inverts), by the contact flow, or material.
+SurfaceInteraction<Var> flowed_vertex(const Scene& scene, const MaterialForm& form,
+                                      const std::vector<DetectorVertex>& chain,
+                                      const std::vector<BSDFSample>& lobes, int k, int t) {
     const SurfaceInteraction3f& si = chain[size_t(k)].si;
     if (k == t) {
-        if (!form.image_space_first_vertex()) return form.vertex(si).p;
+        if (!form.image_space_first_vertex()) return form.vertex(si);
         const Vec3f to_camera = scene.sensor->to_sensor(si.p);
-        return form.ray_vertex(si, Ray(si.p + to_camera, to_camera * -1.f)).p;
+        return form.ray_vertex(si, Ray(si.p + to_camera, to_camera * -1.f));
     }
-    if (!follows_flow(form, chain, delta, k)) return form.vertex(si).p;
-    Var jacobian;
-    return form.flowed_vertex(si, flowed_position(scene, form, chain, delta, k + 1, t), jacobian).p;
+    if (!follows_flow(form, chain, lobes, k)) return form.vertex(si);
+    SurfaceInteraction<Var> before = flowed_vertex(scene, form, chain, lobes, k + 1, t);
+    const BSDFSample& sampled = lobes[size_t(k + 1)];
+    if (!(sampled.sampled_type & BSDFDelta)) {
+        Var jacobian;
+        return form.flowed_vertex(si, before.p, jacobian);
+    }
+    BSDFSample lobe = sampled;
+    lobe.wo = chain[size_t(k + 1)].si.wi;
+    lobe.eta = 1.f / sampled.eta;
+    before.wi = before.to_local(normalize(flowed_vertex(scene, form, chain, lobes, k + 2, t).p - before.p));
+    return form.ray_vertex(si, before.p, before.to_world(delta_direction(before.wi, sampled.wo, lobe)));
 }
 
 } // namespace
@@ -97,19 +109,21 @@ void detector_connections(const Scene& scene, const MaterialForm& form, const Bo
     const BSDFContext ctx{TransportMode::Importance};
     DetectorVertex v{segment.receiver, segment.direction * -1.f, segment.medium};
     Color3f throughput(1.f);
-    // The subpath's vertices and whether each sampled a delta lobe (for the receiver's contact flow).
+    // The subpath's vertices and the lobe each sampled (for the receiver's flow).
     thread_local std::vector<DetectorVertex> chain;
-    thread_local std::vector<bool> delta;
+    thread_local std::vector<BSDFSample> lobes;
     chain.clear();
-    delta.clear();
+    lobes.clear();
     const auto velocity = [&](int t) {
-        if (t == 0 || segment.in_medium || !follows_flow(form, chain, delta, 0))
+        if (t == 0 || segment.in_medium || !follows_flow(form, chain, lobes, 0))
             return segment.velocity_at_depth(t);
-        return segment.velocity_relative_to(form, flowed_position(scene, form, chain, delta, 0, t));
+        for (int k = 1; k <= t; ++k) // a medium vertex toward the camera: its material point (docs/design.md)
+            if (chain[size_t(k)].in_medium()) return segment.velocity_at_depth(t);
+        return segment.velocity_relative_to(form, flowed_vertex(scene, form, chain, lobes, 0, t).p);
     };
     for (int t = 0; t_max < 0 || t <= t_max; ++t) {
         chain.push_back(v);
-        delta.push_back(false);
+        lobes.push_back(BSDFSample{});
         const BSDF* bsdf = v.si.bsdf();
         if (!v.in_medium() && !bsdf) return;
         if (t >= t_min && (v.in_medium() || bsdf->has(BSDFSmooth))) {
@@ -140,7 +154,7 @@ void detector_connections(const Scene& scene, const MaterialForm& form, const Bo
             const auto [bs, weight] = bsdf->sample(ctx, v.si, u1, sampler.next_2d());
             if (is_black(weight)) return;
             d = v.si.to_world(bs.wo);
-            delta.back() = (bs.sampled_type & BSDFDelta) != 0;
+            lobes.back() = bs;
             throughput *= weight * adjoint_shading_correction(v.si, d);
             medium = target_medium(*v.si.shape, v.si.n, d, medium);
             ray = v.si.spawn_ray(d);

@@ -41,7 +41,8 @@ struct DetectorConnections {
 //
 // Each connection carries the segment's velocity relative to the receiver's flow along its subpath: x_D0 as
 // the camera sees it (t = 0), its material point, or, where x_D0 lies within the contact length of the next
-// vertex toward the camera, the contact flow of the chain of vertices back to the camera (MaterialForm).
+// vertex toward the camera or is reached through its delta lobe, the flow of the chain of surface vertices
+// back to the camera (MaterialForm's contact flow, the delta lobes' directions: as the interior's path walk).
 void detector_connections(const Scene& scene, const MaterialForm& form, const BoundarySegment& segment, int t_min,
                           int t_max, const PathSettings& settings, Sampler& sampler, RayCounter& rays,
                           DetectorConnections& out);

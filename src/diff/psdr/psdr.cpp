@@ -2,6 +2,7 @@
 
 #include "core/batch_stats.h"
 #include "diff/psdr/budget.h"
+#include "diff/specular_chains.h"
 
 #include <array>
 #include <chrono>
@@ -38,11 +39,14 @@ void boundary_batches(const Scene& scene, const Parameters& params, const PsdrOp
 }
 
 // The primary, direct and indirect boundary terms connect surface points to a single center of projection:
-// with a finite aperture they are refused for parameters that move geometry (diff/first_vertex.h).
+// with a finite aperture they are refused for parameters that move geometry (diff/first_vertex.h), and so is
+// a moving discontinuity that the camera sees only through delta lobes (diff/specular_chains.h).
 void require_pinhole_terms(const Scene& scene, const Parameters& params, const PsdrOptions& options) {
     if (options.primary_spp > 0) require_pinhole(scene, params, "primary");
     if (options.direct_spp > 0) require_pinhole(scene, params, "direct");
     if (options.indirect_spp > 0) require_pinhole(scene, params, "indirect");
+    if (options.primary_spp > 0 || options.direct_spp > 0 || options.indirect_spp > 0)
+        require_no_moving_edges_behind_delta_lobes(scene, params, "psdr");
 }
 
 // The boundary terms of a scene with their budgets and seeds; the discontinuity edges are collected once.

@@ -3,6 +3,7 @@
 #include "diff/film_sample.h"
 #include "diff/material_form.h"
 #include "diff/pixel_driver.h"
+#include "diff/specular_chains.h"
 #include "render/light_medium.h"
 #include "render/path_tracer.h"
 
@@ -76,16 +77,15 @@ struct WarRule {
     }
 
     void scatter(const BSDF& bsdf, const SurfaceInteraction3f& hit, const SurfaceInteraction<Var>& si,
-                 const BSDFSample& bs, const Color3f& weight, const Vec3f& d, const SurfaceInteraction3f& to,
-                 bool delta, Color3<Var>& throughput, RayCounter& rays) {
+                 const BSDFSample& bs, const Color3f& /*weight*/, const Vec3f& d,
+                 const SurfaceInteraction3f& to, bool delta, Color3<Var>& throughput, RayCounter& rays) {
         const BSDFContext ctx{TransportMode::Radiance};
         const WarNeighbor here{hit, material};
         SurfaceInteraction<Var> next_si;
         if (delta) {
-            // No area integral at a delta lobe: the direction is fixed, no derivative flows through it.
-            throughput *= Color3<Var>(weight);
-            if (to.is_valid()) next_si = c.form.vertex(to), material = next_si.p;
-            escaped = Vec3<Var>(d);
+            // No area integral after a delta lobe: the next vertex is where its direction meets the surface.
+            escaped = delta_step(bsdf, hit, si, bs, throughput);
+            if (to.is_valid()) next_si = c.form.ray_vertex(to, si.p, escaped), material = next_si.p;
         } else if (to.is_valid()) {
             // p^D_{n+1} warped conditioned on p^D_n: f_s G J (1 + ∇·v) / (G_0 p_σ).
             const WarVertex x = war_vertex(c.field, to, here, rng, rays.rays);
@@ -239,6 +239,7 @@ void require_war_support(const Scene& scene, const Parameters& params) {
         throw Error(
             "method war needs a sensor with one center of projection (perspective, orthographic, "
             "thinlens with aperture 0): its first vertex's field is conditioned on the camera's position");
+    require_no_moving_edges_behind_delta_lobes(scene, params, "war");
 }
 
 DerivativeImage war_derivative(const Scene& scene, const Parameters& params, const WarOptions& options) {

@@ -27,11 +27,12 @@ struct Context {
 };
 
 // The subpath vertex v on the geometry, a surface vertex warped conditioned on its detector-side neighbour y
-// unless `warp` is false (reached along a delta lobe); `material` gets X(p, θ) without the warp.
-MeasuredVertex<Var> warped_vertex(const Context& c, const PathVertex& v, bool warp, const WarNeighbor& y,
+// (a vertex after a delta lobe is not warped: diff/path_measurement.h steered_vertex); `material` gets X(p,
+// θ) without the warp.
+MeasuredVertex<Var> warped_vertex(const Context& c, const PathVertex& v, const WarNeighbor& y,
                                   AuxiliaryRng& rng, uint64_t& rays, Vec3<Var>* material = nullptr) {
     const bool surface = v.type == VertexType::Surface || (v.type == VertexType::Light && v.emitter->shape());
-    if (!warp || !surface) {
+    if (!surface) {
         const MeasuredVertex<Var> m = measured_vertex<Var>(v, c.form);
         if (material) *material = m.p;
         return m;
@@ -126,19 +127,24 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng,
     const WarNeighbor camera{Interaction3f{Infinity, shot.ray.o, Vec3f(0.f)}, o};
     z.assign(2, MeasuredVertex<Var>());
     z_material.assign(2, o);
-    z[1] = warped_vertex(c, camera_path[1], true, camera, rng, rays.rays, &z_material[1]);
+    z[1] = warped_vertex(c, camera_path[1], camera, rng, rays.rays, &z_material[1]);
     Var factor;
     if (!camera_factor(c, shot, z[1], factor)) return Color3<Var>(Var(0.f));
     z[1].jacobian = Var(1.f); // in the camera factor
     for (size_t k = 2; k < camera_path.size(); ++k) {
         const PathVertex& v = camera_path[k];
         z_material.push_back(Vec3<Var>());
+        if (camera_path[k - 1].delta) { // no warp after a delta lobe: its direction turns with the geometry
+            z.push_back(steered_vertex(v, z[k - 1], k == 2 ? o : z[k - 2].p, c.form));
+            z_material.back() = z.back().p;
+            continue;
+        }
         if (v.infinite) {
             z.push_back(escaped_vertex(v, z.back().p, v.d_env));
             continue;
         }
         const WarNeighbor previous{camera_path[k - 1].si, z_material[k - 1]};
-        z.push_back(warped_vertex(c, v, !camera_path[k - 1].delta, previous, rng, rays.rays, &z_material[k]));
+        z.push_back(warped_vertex(c, v, previous, rng, rays.rays, &z_material[k]));
     }
     camera_prefix(z, o, record, c.form, camera_factors);
 
@@ -147,8 +153,9 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng,
     y.clear();
     for (size_t j = 0; j + 2 <= s_max; ++j) {
         const WarNeighbor toward{light_path[j + 1].si, c.form.vertex(light_path[j + 1].si).p};
-        y.push_back(
-            warped_vertex(c, light_path[j], j == 0 || !light_path[j - 1].delta, toward, rng, rays.rays));
+        y.push_back(j >= 2 && light_path[j - 1].delta
+                        ? steered_vertex(light_path[j], y[j - 1], y[j - 2].p, c.form)
+                        : warped_vertex(c, light_path[j], toward, rng, rays.rays));
     }
     light_prefix(y, record, c.form, light_factors);
 
@@ -163,7 +170,9 @@ Color3<Var> camera_sample(const Context& c, Sampler& sampler, AuxiliaryRng& rng,
         if (s < 2) return path_measurement(st, z, y, camera_factors, light_factors, o, c.scene, c.form);
         // y_{s−1} warped given z_{t−1} in place of its warp given y_s.
         ys.assign(y.begin(), y.begin() + std::ptrdiff_t(s - 1));
-        ys.push_back(warped_vertex(c, light_path[s - 1], !light_path[s - 2].delta, here, rng, rays.rays));
+        ys.push_back(s >= 3 && light_path[s - 2].delta
+                         ? steered_vertex(light_path[s - 1], y[s - 2], y[s - 3].p, c.form)
+                         : warped_vertex(c, light_path[s - 1], here, rng, rays.rays));
         heads.assign(light_factors.begin(), light_factors.begin() + std::ptrdiff_t(s - 1));
         heads.push_back(light_head(c, record, ys, light_factors, ys.back(), s - 1));
         return path_measurement(st, z, ys, camera_factors, heads, o, c.scene, c.form);

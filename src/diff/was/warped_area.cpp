@@ -4,6 +4,7 @@
 #include "diff/film_sample.h"
 #include "diff/material_form.h"
 #include "diff/pixel_driver.h"
+#include "diff/specular_chains.h"
 #include "diff/was/auxiliary_rays.h"
 #include "diff/was/control_variate.h"
 #include "render/light_medium.h"
@@ -105,14 +106,12 @@ struct WasRule {
     }
 
     void scatter(const BSDF& bsdf, const SurfaceInteraction3f& hit, const SurfaceInteraction<Var>& si,
-                 const BSDFSample& bs, const Color3f& weight, const Vec3f& d, const SurfaceInteraction3f& to,
-                 bool delta, Color3<Var>& throughput, RayCounter& rays) {
+                 const BSDFSample& bs, const Color3f& /*weight*/, const Vec3f& d,
+                 const SurfaceInteraction3f& to, bool delta, Color3<Var>& throughput, RayCounter& rays) {
         const BSDFContext ctx{TransportMode::Radiance};
         if (delta) {
-            // No integral over directions at a delta lobe (no derivative flows through it, as the interior
-            // term).
-            direction = Vec3<Var>(d);
-            throughput *= Color3<Var>(weight);
+            // No integral over directions at a delta lobe: its direction turns with the geometry.
+            direction = delta_step(bsdf, hit, si, bs, throughput);
         } else {
             const WarpEstimate e = warp_at(c, hit, si, d, rng, rays);
             direction = e.direction;
@@ -374,6 +373,7 @@ void require_was_support(const Scene& scene, const Parameters& params) {
         throw Error(
             "method was warps the film: it needs a sensor with one center of projection (perspective, "
             "orthographic, thinlens with aperture 0)");
+    require_no_moving_edges_behind_delta_lobes(scene, params, "was");
 }
 
 DerivativeImage was_derivative(const Scene& scene, const Parameters& params, const WasOptions& options) {
