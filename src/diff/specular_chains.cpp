@@ -39,13 +39,11 @@ struct ChainEnd {
 class ChainGrid {
   public:
     ChainGrid(const Scene& scene, const Parameters& params) : scene_(scene), params_(params) {
+        // One point of a point-like light, two of an area light, four directions of an environment.
+        const Vec2f u[4] = {Vec2f(0.3f, 0.3f), Vec2f(0.7f, 0.7f), Vec2f(0.3f, 0.7f), Vec2f(0.7f, 0.3f)};
         for (const auto& e : scene.emitters) {
-            if (e->is_infinite()) continue;
-            const bool point = !e->shape();
-            for (const Vec2f u : {Vec2f(0.3f, 0.3f), Vec2f(0.7f, 0.7f)}) {
-                if (probes_.size() < size_t(MaxProbes)) probes_.push_back({e.get(), u});
-                if (point) break;
-            }
+            const int n = e->is_infinite() ? (e->is_delta() ? 1 : 4) : e->shape() ? 2 : 1;
+            for (int k = 0; k < n && probes_.size() < size_t(MaxProbes); ++k) probes_.push_back({e.get(), u[k]});
         }
     }
 
@@ -89,11 +87,12 @@ class ChainGrid {
     void end_at(const SurfaceInteraction3f& hit, ChainEnd end, std::vector<ChainEnd>& out) const {
         end.end = hit.shape;
         for (size_t k = 0; k < probes_.size(); ++k) {
-            const auto [ds, weight] = probes_[k].emitter->sample_direction(hit, probes_[k].u);
+            const Emitter& e = *probes_[k].emitter;
+            const auto [ds, weight] = e.sample_direction(hit, probes_[k].u);
             if (is_black(weight)) continue;
-            const SurfaceInteraction3f blocker = scene_.intersect(hit.spawn_ray_to(ds.p));
-            if (blocker.is_valid() &&
-                !(blocker.shape->emitter && blocker.shape == probes_[k].emitter->shape()))
+            const SurfaceInteraction3f blocker =
+                scene_.intersect(e.is_infinite() ? hit.spawn_ray(ds.d) : hit.spawn_ray_to(ds.p));
+            if (blocker.is_valid())
                 end.blocker[k] = blocker.shape;
             else
                 end.lit |= 1u << k;

@@ -6,8 +6,9 @@
 // follow every delta lobe (up to four deep) to the first other surface; two neighbouring rays whose chains
 // agree (the same delta surfaces and lobes) but end on different shapes (or one escapes), or whose end points
 // differ in what they see of a light, straddle such a discontinuity, and it moves when a shape of either
-// chain, an end, the light, or the shadow's blocker moves. A grid finer than the features it must see can
-// miss a small one (documented limit).
+// chain, an end, the light, or the shadow's blocker moves. Limits: a feature smaller than the grid's spacing
+// can pass unseen, and so can a crease of one shape; the boundaries of light arriving at an end point from
+// other surfaces (a moving object's interreflection seen in a mirror) are not probed.
 #pragma once
 #include "diff/parameters.h"
 
