@@ -74,3 +74,5 @@ reference glass_ball_slide 16
 reference glass_ball_slide_2h 16
 reference mirror_turn_inner 16 crop_x=4 crop_y=6 crop_width=8 crop_height=6
 reference mirror_turn_inner_2h 16 crop_x=4 crop_y=6 crop_width=8 crop_height=6
+reference murky_ball_slide 16 crop_x=4 crop_y=4 crop_width=8 crop_height=8
+reference murky_ball_slide_2h 16 crop_x=4 crop_y=4 crop_width=8 crop_height=8

@@ -96,6 +96,14 @@ TEST(Specular, GlassBallMovingMatchesFiniteDifferences) {
                       true, 1024);
 }
 
+// The same ball with a scattering medium inside (volpath, diff/psdr/interior_media.h): medium vertices after
+// a refraction keep their free-flight distance along the refracted direction (8 × 8 crop of the ball).
+TEST(Specular, MurkyGlassBallMovingMatchesFiniteDifferences) {
+    expect_matches_fd("psdr", {}, "murky_ball.xml", "ball.translate=1,0,0",
+                      {"murky_ball_slide", {"crop_x=4", "crop_y=4", "crop_width=8", "crop_height=8"}}, 2e-3,
+                      true, 2048);
+}
+
 // A discontinuity seen only through a delta lobe — here a card's silhouette and shadow reflected in a mirror
 // — has no boundary term yet (the boundary terms reach the camera by next-event connections): the methods
 // that differentiate visibility refuse it in one line instead of returning the derivative without it
