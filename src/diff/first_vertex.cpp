@@ -12,8 +12,6 @@ FirstVertex parse_first_vertex(const std::string& name) {
     throw Error("unknown first-vertex form '" + name + "' (expected auto, image or material)");
 }
 
-namespace {
-
 bool moves_geometry(const Scene& scene, const Parameters& params) {
     if (!params.sensor_motions().empty()) return true;
     for (const auto& shape : scene.shapes)
@@ -22,6 +20,8 @@ bool moves_geometry(const Scene& scene, const Parameters& params) {
         if (!params.emitter_motions(emitter.get()).empty()) return true; // its shadows move
     return false;
 }
+
+namespace {
 
 std::string viewpoint_note(const Scene& scene) {
     return scene.sensor->plugin +

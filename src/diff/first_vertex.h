@@ -34,6 +34,9 @@ FirstVertex parse_first_vertex(const std::string& name);
 // triangles.
 bool image_space_first_vertex(const Scene& scene, const Parameters& params, FirstVertex choice);
 
+// Whether the parameters move the sensor, a shape or a light (so that some discontinuity of the image moves).
+bool moves_geometry(const Scene& scene, const Parameters& params);
+
 // Throws Error when the sensor does not project points and the parameters move geometry: the boundary term
 // `term` connects surface points to a single center of projection.
 void require_pinhole(const Scene& scene, const Parameters& params, const std::string& term);

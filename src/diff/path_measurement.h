@@ -89,12 +89,11 @@ MeasuredVertex<Var> steered_vertex(const PathVertex& b, const MeasuredVertex<Var
     SurfaceInteraction<Var> si = a.si;
     si.wi = si.to_local(normalize(from - a.p));
     const Vec3<Var> d = si.to_world(delta_direction(si.wi, hit.wi, bs));
-    MeasuredVertex<Var> m = escaped_vertex(b, a.p, Vec3f(0.f));
-    m.p = a.p + d;
-    if (b.infinite) return m;
-    m.infinite = false;
-    if (b.type == VertexType::Medium) {
-        m.p = a.p + d * Var(norm(b.p - a.ref->p));
+    MeasuredVertex<Var> m;
+    m.ref = &b;
+    m.infinite = b.infinite;
+    if (b.infinite || b.type == VertexType::Medium) {
+        m.p = a.p + (b.infinite ? d : d * Var(norm(b.p - a.ref->p)));
         return m;
     }
     m.si = geometry.ray_vertex(b.si, a.p, d);

@@ -2,7 +2,9 @@
 
 #include "core/error.h"
 #include "core/rng.h"
+#include "diff/first_vertex.h"
 
+#include <algorithm>
 #include <array>
 #include <vector>
 
@@ -55,6 +57,7 @@ class ChainGrid {
         if (!hit.is_valid() || !has_delta_lobe(hit)) return;
         ChainEnd start;
         start.through = hit.shape;
+        start.chain_moves = !params_.sensor_motions().empty(); // the camera moves every chain
         follow(hit, 0, start, out);
     }
 
@@ -106,12 +109,10 @@ class ChainGrid {
 };
 
 // What moves across the boundary between the ends a and b of one chain, or an empty string.
-std::string moving_discontinuity(const ChainGrid& grid, const ChainEnd& a, const ChainEnd& b,
-                                 bool camera_moves) {
+std::string moving_discontinuity(const ChainGrid& grid, const ChainEnd& a, const ChainEnd& b) {
     const auto name = [](const Shape* s) { return s ? "'" + s->id + "'" : std::string("the background"); };
-    const bool chain_moves = camera_moves || a.chain_moves;
     if (a.end != b.end) {
-        if (chain_moves || grid.moves(a.end) || grid.moves(b.end))
+        if (a.chain_moves || grid.moves(a.end) || grid.moves(b.end))
             return name(a.end) + " meets " + name(b.end);
         return "";
     }
@@ -119,7 +120,7 @@ std::string moving_discontinuity(const ChainGrid& grid, const ChainEnd& a, const
     for (size_t k = 0; k < grid.probes().size(); ++k) {
         if (!(differ & (1u << k))) continue;
         const Shape* blocker = a.blocker[k] ? a.blocker[k] : b.blocker[k];
-        if (chain_moves || grid.moves(a.end) || grid.moves(blocker) || grid.moves(grid.probes()[k].emitter))
+        if (a.chain_moves || grid.moves(a.end) || grid.moves(blocker) || grid.moves(grid.probes()[k].emitter))
             return "the shadow of " + name(blocker) + " on " + name(a.end);
     }
     return "";
@@ -129,14 +130,10 @@ std::string moving_discontinuity(const ChainGrid& grid, const ChainEnd& a, const
 
 void require_no_moving_edges_behind_delta_lobes(const Scene& scene, const Parameters& params,
                                                 const std::string& method) {
-    bool delta = false, moving = !params.sensor_motions().empty();
-    for (const auto& shape : scene.shapes) {
-        delta = delta || (shape->bsdf && shape->bsdf->has(DeltaLobes));
-        moving = moving || params.moves(*shape);
-    }
-    for (const auto& e : scene.emitters)
-        moving = moving || !params.emitter_motions(e.get()).empty();
-    if (!delta || !moving) return;
+    const bool delta = std::any_of(scene.shapes.begin(), scene.shapes.end(), [](const auto& shape) {
+        return shape->bsdf && shape->bsdf->has(DeltaLobes);
+    });
+    if (!delta || !moves_geometry(scene, params)) return;
 
     const ChainGrid grid(scene, params);
     const Film& film = *scene.sensor->film;
@@ -156,8 +153,7 @@ void require_no_moving_edges_behind_delta_lobes(const Scene& scene, const Parame
                     if (!n) continue;
                     for (const ChainEnd& b : *n) {
                         if (b.chain != a.chain) continue;
-                        const std::string what =
-                            moving_discontinuity(grid, a, b, !params.sensor_motions().empty());
+                        const std::string what = moving_discontinuity(grid, a, b);
                         if (what.empty()) continue;
                         const Vec2f s = position(i, j);
                         throw Error(

@@ -240,7 +240,7 @@ template <typename T, typename Geometry> struct GeometryRule {
     void scatter(const BSDF& bsdf, const SurfaceInteraction3f& hit, const SurfaceInteraction<T>& si,
                  const BSDFSample& bs, const Color3f& weight, const Vec3f& d,
                  const SurfaceInteraction3f& next_hit, bool delta, Color3<T>& throughput, RayCounter&) {
-        steered = Vec3<T>(d);
+        if constexpr (!reference) steered = Vec3<T>(d);
         using std::abs;
         using std::sqrt;
         const BSDFContext ctx{TransportMode::Radiance};

@@ -107,9 +107,10 @@ inline SurfaceInteraction<Var> constant_interaction(const SurfaceInteraction3f& 
 // The direction of the delta lobe sampled in `bs` (at the reference incident direction wi0, local) for the
 // incident direction wi (local, on the tape): the lobe keeps its generalized half vector h ∝ wi0 + η wo0
 // fixed in the shading frame (paper 003 Eq. 3; η = bs.eta across a refraction, 1 for a reflection), so
-//   reflection  wo = 2 (wi · h) h − wi,
-//   refraction  wo = h (c η_ti + cos θ_t) − wi η_ti,  c = wi · h, η_ti = 1/η, cos θ_t = −sign(c) √(1 − η_ti²
-//   (1 − c²)), null        wo = −wi (the ray goes on).
+//   reflection:  wo = 2 (wi · h) h − wi;
+//   refraction:  wo = h (c η_ti + cos θ_t) − wi η_ti, with c = wi · h, η_ti = 1 / η and
+//                cos θ_t = −sign(c) √(1 − η_ti² (1 − c²));
+//   null lobe:   wo = −wi (the ray goes on).
 template <typename T> Vec3<T> delta_direction(const Vec3<T>& wi, const Vec3f& wi0, const BSDFSample& bs) {
     const bool reflection = (bs.sampled_type & BSDFDeltaReflection) != 0;
     const float eta = reflection ? 1.f : bs.eta;

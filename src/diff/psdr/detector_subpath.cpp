@@ -74,31 +74,40 @@ bool follows_flow(const MaterialForm& form, const std::vector<DetectorVertex>& c
     return !si.shape->emitter && form.contact_weight(norm(si.p - chain[size_t(k + 1)].si.p)) > 0.f;
 }
 
-// Path vertex k of a detector subpath (chain[0] = x_D0, chain[t] seen by the camera; surfaces) under the
-// interior's flow: the first path vertex on its camera ray (or its material point), later ones carried from
-// their predecessor toward the camera: along its delta lobe (the detector walk sampled it the other way: the
-// lobe's reference directions swap and its relative index inverts), by the contact flow, or material.
-SurfaceInteraction<Var> flowed_vertex(const Scene& scene, const MaterialForm& form,
-                                      const std::vector<DetectorVertex>& chain,
-                                      const std::vector<BSDFSample>& lobes, int k, int t) {
-    const SurfaceInteraction3f& si = chain[size_t(k)].si;
-    if (k == t) {
-        if (!form.image_space_first_vertex()) return form.vertex(si);
-        const Vec3f to_camera = scene.sensor->to_sensor(si.p);
-        return form.ray_vertex(si, Ray(si.p + to_camera, to_camera * -1.f));
+// The receiver x_D0 = chain[0] of a detector subpath (chain[t] seen by the camera; surfaces) under the
+// interior's flow, built from the camera side as the interior's path walk builds it: the first path vertex on
+// its camera ray (or its material point), each later one carried from its predecessor toward the camera
+// (follows_flow) along the predecessor's delta lobe (the detector walk sampled it the other way: the lobe's
+// reference directions swap and its relative index inverts) or by the contact flow, else its material point.
+SurfaceInteraction<Var> flowed_receiver(const Scene& scene, const MaterialForm& form,
+                                        const std::vector<DetectorVertex>& chain,
+                                        const std::vector<BSDFSample>& lobes, int t) {
+    const SurfaceInteraction3f& seen = chain[size_t(t)].si;
+    const Vec3f to_camera = scene.sensor->to_sensor(seen.p);
+    SurfaceInteraction<Var> x = form.image_space_first_vertex()
+                                    ? form.ray_vertex(seen, Ray(seen.p + to_camera, to_camera * -1.f))
+                                    : form.vertex(seen);
+    Vec3<Var> beyond(seen.p + to_camera); // the vertex after x toward the camera
+    for (int k = t - 1; k >= 0; --k) {
+        const SurfaceInteraction3f& si = chain[size_t(k)].si;
+        const BSDFSample& sampled = lobes[size_t(k + 1)];
+        SurfaceInteraction<Var> y;
+        if (!follows_flow(form, chain, lobes, k)) {
+            y = form.vertex(si);
+        } else if (!(sampled.sampled_type & BSDFDelta)) {
+            Var jacobian;
+            y = form.flowed_vertex(si, x.p, jacobian);
+        } else {
+            BSDFSample lobe = sampled;
+            lobe.wo = chain[size_t(k + 1)].si.wi;
+            lobe.eta = 1.f / sampled.eta;
+            x.wi = x.to_local(normalize(beyond - x.p));
+            y = form.ray_vertex(si, x.p, x.to_world(delta_direction(x.wi, sampled.wo, lobe)));
+        }
+        beyond = x.p;
+        x = y;
     }
-    if (!follows_flow(form, chain, lobes, k)) return form.vertex(si);
-    SurfaceInteraction<Var> before = flowed_vertex(scene, form, chain, lobes, k + 1, t);
-    const BSDFSample& sampled = lobes[size_t(k + 1)];
-    if (!(sampled.sampled_type & BSDFDelta)) {
-        Var jacobian;
-        return form.flowed_vertex(si, before.p, jacobian);
-    }
-    BSDFSample lobe = sampled;
-    lobe.wo = chain[size_t(k + 1)].si.wi;
-    lobe.eta = 1.f / sampled.eta;
-    before.wi = before.to_local(normalize(flowed_vertex(scene, form, chain, lobes, k + 2, t).p - before.p));
-    return form.ray_vertex(si, before.p, before.to_world(delta_direction(before.wi, sampled.wo, lobe)));
+    return x;
 }
 
 } // namespace
@@ -119,7 +128,7 @@ void detector_connections(const Scene& scene, const MaterialForm& form, const Bo
             return segment.velocity_at_depth(t);
         for (int k = 1; k <= t; ++k) // a medium vertex toward the camera: its material point (docs/design.md)
             if (chain[size_t(k)].in_medium()) return segment.velocity_at_depth(t);
-        return segment.velocity_relative_to(form, flowed_vertex(scene, form, chain, lobes, 0, t).p);
+        return segment.velocity_relative_to(form, flowed_receiver(scene, form, chain, lobes, t).p);
     };
     for (int t = 0; t_max < 0 || t <= t_max; ++t) {
         chain.push_back(v);
