@@ -41,10 +41,11 @@ class WasScene : public testing::TestWithParam<std::tuple<std::string, std::stri
 // (4096 spp: relerr4 0.067 against a noise expectation of 0.035, seed against seed 0.047 against 0.038,
 // against references at 0.05 and 0.025 rad that agree; it was 0.18, z ≈ −8 before the primary term took the
 // edges' sides on their own faces); at the CI budget 2 of 10 seeds fail (seed 1: relerr4 0.181 against a
-// limit of 0.171; seed 3: z −4.9). The suspect is the smooth-shaded tube's attached shadows: where the light
-// lies between two faces' planes the radiance jumps across their edge (a fixed material curve, nothing to
-// sample in material form); sampled as creases they lower relerr4 but bias the image mean (z +2 to +7). The
-// material form agrees (relerr4 0.089, noise 0.058, z −1.6).
+// limit of 0.171; seed 3: z −4.9). The smooth-shaded tube's horizons (diff/psdr/shading_horizon.h, the light
+// crossing its turning faces' planes) were a missing term in both forms: with them the material form's mean
+// is right (4096 spp, three seeds: +0.00019 → −0.00005 against +0.00001), and the image-space form's moves by
+// the same −0.00025 to −0.00022: its own bias, of the opposite sign, had hidden the missing term (seed 3 at
+// the CI budget: z −4.3).
 // was on hedge: the consistent estimate (N' = 32) is half the reference (256 spp: mean −0.058 against
 // −0.123, z +7.6) and takes 175 s at 32 × 32 on two cores (auxiliary rays at every vertex among 220k
 // triangles): measured in the study (docs/warped-area-sampling.md), not in CI.

@@ -19,6 +19,7 @@ class AuxiliaryRng {
         : pcg_(mix_bits(seed ^ mix_bits(pixel * 0x9E3779B97F4A7C15ULL + sample + salt.sample)),
                mix_bits(seed + pixel + salt.pixel)) {}
     float next_1d() { return pcg_.next_float(); }
+    uint64_t next_u64() { return (uint64_t(pcg_.next_uint()) << 32) | pcg_.next_uint(); }
     Vec2f next_2d() {
         const float a = pcg_.next_float();
         return {a, pcg_.next_float()};

@@ -129,6 +129,10 @@ Vec3<T> delta_step(const BSDF& bsdf, const SurfaceInteraction3f& hit, const Surf
 //   void scatter(bsdf, hit, si, bs, weight, d, next, delta, throughput, rays)   multiplies the throughput by the
 //                                             step's factor f_s G J / (G_0 p_σ) to `next` (invalid: escaped along
 //                                             d; weight = f/p in float, delta: a delta lobe was sampled).
+// and optionally
+//   Color3<T> attached_boundary(bsdf, hit, si, depth, rays)   a boundary term of the light scattered at the
+//                                             vertex that no edge carries, as a value-0 quantity whose
+//                                             derivative is the term's (diff/psdr/shading_horizon.h).
 // The primal (T = float on the reference geometry) and paper 001's material-form interior term (T = Var on the
 // moving geometry) are GeometryRule; warped-area sampling (diff/was/warped_area.cpp) and warped-area
 // reparameterization (diff/war/war.cpp) warp the vertices with their fields.
@@ -176,6 +180,8 @@ Color3<T> trace_path(const Scene& scene, Sampler& sampler, const Ray& primary, c
                 const float w = ds.delta ? 1.f : mis_power(ds.pdf, bsdf->pdf(ctx, hit, hit.to_local(ds.d)));
                 L += throughput * contribution * T(w);
             }
+            if constexpr (requires { rule.attached_boundary(*bsdf, hit, si, depth, rays); })
+                L += throughput * rule.attached_boundary(*bsdf, hit, si, depth, rays);
         } else {
             sampler.next_2d(); // keep the sample stream aligned across materials
         }

@@ -5,6 +5,7 @@
 #include "diff/material_form.h"
 #include "diff/pixel_driver.h"
 #include "diff/psdr/interior_media.h"
+#include "diff/psdr/shading_horizon.h"
 #include "render/light_medium.h"
 
 
@@ -12,12 +13,15 @@ namespace penumbra {
 
 namespace {
 
+// The shading horizon's random numbers, apart from the warped-area estimators' auxiliary streams.
+constexpr AuxiliarySalt HorizonSalt{0x2545F4914F6CDD1DULL, 0x9E6C63D0676A9A99ULL};
+
 // One camera path of pixel (x, y) with the image-space first vertex: the film position is drawn by filter
 // importance sampling, as the renderer does (stratified over the pixel's samples), and its ray stays fixed;
 // x1(θ) slides along it with the surface (MaterialForm::ray_vertex). The camera factor W_j / p is the renderer's sample weight, independent of θ.
 Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sampler& sampler, int x, int y,
                                const PixelStratum& stratum, bool media, const BDPTPass* bdpt,
-                               const PathSettings& settings, RayCounter& rays) {
+                               HorizonRule& rule, const PathSettings& settings, RayCounter& rays) {
     const Sensor& sensor = *scene.sensor;
     const Vec2f pos = sensor.film->sample_position(x, y, stratum(sampler.next_2d()));
     const auto [ray, ray_weight] = sensor.sample_ray(pos, sampler.next_2d());
@@ -30,7 +34,7 @@ Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sam
                                       : form.environment(scene, ray.d) * Color3<Var>(ray_weight);
     SurfaceInteraction<Var> x1 = form.ray_vertex(first, ray);
     x1.wi = x1.to_local(Vec3<Var>(ray.d * -1.f));
-    return trace_path<Var>(scene, sampler, ray, first, x1, form, settings, rays) * Color3<Var>(ray_weight);
+    return trace_path<Var>(scene, sampler, ray, first, x1, rule, settings, rays) * Color3<Var>(ray_weight);
 }
 
 // One camera path of pixel (x, y) as a function of θ: W_j(x1(θ)) L(x1 → camera) / p, with the camera factor
@@ -38,9 +42,9 @@ Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sam
 // film, P_j the normalized reconstruction filter of pixel j, s the projection of x1).
 Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sampler& sampler, int x, int y,
                                 const PixelStratum& stratum, bool mirror, bool media, const BDPTPass* bdpt,
-                                const PathSettings& settings, RayCounter& rays) {
+                                HorizonRule& rule, const PathSettings& settings, RayCounter& rays) {
     if (form.image_space_first_vertex())
-        return sample_image_space(scene, form, sampler, x, y, stratum, media, bdpt, settings, rays);
+        return sample_image_space(scene, form, sampler, x, y, stratum, media, bdpt, rule, settings, rays);
     const Sensor& sensor = *scene.sensor;
     const ReconstructionFilter& filter = *sensor.film->rfilter;
     const FilmSample fs = sample_film(filter, sampler, mirror);
@@ -81,7 +85,7 @@ Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sa
     const Var camera_factor = P * relative_change(jacobian * form.jacobian(first)) / Var(fs.pdf);
 
     x1.wi = x1.to_local(form.direction_from_reference_camera(sensor.to_sensor(p_cam)));
-    return trace_path<Var>(scene, sampler, ray, first, x1, form, settings, rays) * camera_factor;
+    return trace_path<Var>(scene, sampler, ray, first, x1, rule, settings, rays) * camera_factor;
 }
 
 // The interior term's samples on `loop`: sample_contribution, antithetic pairs mirrored, the film position
@@ -98,11 +102,14 @@ void set_interior_samples(PixelLoop& loop, std::shared_ptr<const MaterialForm> f
         bidirectional_interior(scene, options.estimator)
             ? std::make_shared<const BDPTPass>(bidirectional_pass(scene, settings))
             : nullptr;
-    loop.tiles = per_sample([&scene, form, media, bdpt, antithetic, spp,
+    const auto horizon = std::make_shared<const ShadingHorizon>(scene, loop.params);
+    loop.tiles = per_sample([&scene, form, media, bdpt, horizon, antithetic, spp,
                              settings](Sampler& sampler, const PixelSample& s, RayCounter& rays) {
         const bool mirror = antithetic && (s.m & 1);
         const PixelStratum stratum(s.m, spp, s.seed, s.pixel);
-        return sample_contribution(scene, *form, sampler, s.x, s.y, stratum, mirror, media, bdpt.get(),
+        HorizonRule rule{
+            {*form}, horizon.get(), settings, AuxiliaryRng(s.seed, s.pixel, uint64_t(s.m), HorizonSalt)};
+        return sample_contribution(scene, *form, sampler, s.x, s.y, stratum, mirror, media, bdpt.get(), rule,
                                    settings, rays);
     });
 }
