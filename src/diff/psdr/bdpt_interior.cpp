@@ -88,7 +88,7 @@ BDPTPass bidirectional_pass(const Scene& scene, const PathSettings& path) {
 // Σ_{s, t>=2} C_{s,t} f(x̄; θ) / f(x̄; θ0) times the camera factor (paper 001 §7 with §5.1's first vertex).
 Color3<Var> bidirectional_camera_path(const BDPTPass& pass, const MaterialForm& form, Sampler& sampler,
                                       const Ray& ray, const Color3f& ray_weight, const CameraFactor& camera,
-                                      float escaped_weight, RayCounter& rays) {
+                                      float escaped_weight, HorizonRule* horizon, RayCounter& rays) {
     thread_local BDPTSample sample;
     thread_local std::vector<MeasuredVertex<Var>> z, y;
     thread_local std::vector<Color3<Var>> camera_factors, light_factors;
@@ -124,9 +124,17 @@ Color3<Var> bidirectional_camera_path(const BDPTPass& pass, const MaterialForm& 
     }
     light_prefix(y, record, form, light_factors);
 
-    const Color3<Var> L = reweighted_strategies(record, [&](const StrategyRecord& st) {
+    Color3<Var> L = reweighted_strategies(record, [&](const StrategyRecord& st) {
         return path_measurement(st, z, y, camera_factors, light_factors, o, pass.scene, form);
     });
+    // The shading horizons at the camera subpath's vertices, with the subpath's throughput (value 0).
+    for (size_t k = 1; horizon && k < camera_path.size(); ++k) {
+        const PathVertex& v = camera_path[k];
+        const BSDF* bsdf = v.type == VertexType::Surface && z[k].surface ? v.si.bsdf() : nullptr;
+        if (bsdf && bsdf->has(BSDFSmooth))
+            L +=
+                Color3<Var>(v.beta) * horizon->attached_boundary(*bsdf, v.si, z[k].si, unsigned(k - 1), rays);
+    }
     return L * Color3<Var>(ray_weight) * camera_factor;
 }
 

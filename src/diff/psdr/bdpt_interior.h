@@ -19,6 +19,7 @@
 // unidirectional estimator.
 #pragma once
 #include "diff/psdr/interior_media.h"
+#include "diff/psdr/shading_horizon.h"
 #include "render/bdpt_sample.h"
 #include "render/bdpt_subpaths.h"
 #include "scene/integrator_settings.h"
@@ -41,10 +42,11 @@ void require_bidirectional_support(const Scene& scene);
 // The pass of the bidirectional estimator: the scene's bdpt settings (or `path`'s), without light tracing
 // (t = 1 is neither sampled nor counted in the MIS weights).
 BDPTPass bidirectional_pass(const Scene& scene, const PathSettings& path);
-// W/p · L(x1 → camera) along one camera sample's bidirectional strategies, on the tape; the other arguments
-// are volumetric_camera_path's (diff/psdr/interior_media.h).
+// W/p · L(x1 → camera) along one camera sample's bidirectional strategies, on the tape, with the shading
+// horizons of the camera subpath's surface vertices (`horizon`, diff/psdr/shading_horizon.h; null: none);
+// the other arguments are volumetric_camera_path's (diff/psdr/interior_media.h).
 Color3<Var> bidirectional_camera_path(const BDPTPass& pass, const MaterialForm& form, Sampler& sampler,
                                       const Ray& ray, const Color3f& ray_weight, const CameraFactor& camera,
-                                      float escaped_weight, RayCounter& rays);
+                                      float escaped_weight, HorizonRule* horizon, RayCounter& rays);
 
 } // namespace penumbra

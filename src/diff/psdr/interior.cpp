@@ -26,7 +26,7 @@ Color3<Var> sample_image_space(const Scene& scene, const MaterialForm& form, Sam
     const Vec2f pos = sensor.film->sample_position(x, y, stratum(sampler.next_2d()));
     const auto [ray, ray_weight] = sensor.sample_ray(pos, sampler.next_2d());
     ++rays.rays;
-    if (bdpt) return bidirectional_camera_path(*bdpt, form, sampler, ray, ray_weight, {}, 1.f, rays);
+    if (bdpt) return bidirectional_camera_path(*bdpt, form, sampler, ray, ray_weight, {}, 1.f, &rule, rays);
     if (media) return volumetric_camera_path(scene, form, sampler, ray, ray_weight, {}, 1.f, settings, rays);
     const SurfaceInteraction3f first = scene.intersect(ray);
     if (!first.is_valid())
@@ -64,7 +64,8 @@ Color3<Var> sample_contribution(const Scene& scene, const MaterialForm& form, Sa
         };
         const float escaped = sensor.film->filter_weight(x, y, center + fs.offset) / fs.pdf;
         if (bdpt)
-            return bidirectional_camera_path(*bdpt, form, sampler, ray, ray_weight, factor, escaped, rays);
+            return bidirectional_camera_path(*bdpt, form, sampler, ray, ray_weight, factor, escaped, &rule,
+                                             rays);
         return volumetric_camera_path(scene, form, sampler, ray, ray_weight, factor, escaped, settings, rays);
     }
     const SurfaceInteraction3f first = scene.intersect(ray);

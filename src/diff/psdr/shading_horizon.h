@@ -9,7 +9,7 @@
 // below the plane (a closed solid blocks one side; an open sheet blocks neither: no jump), ṡ = ds/dθ with x,
 // n_g and y at their material points, and |∇_A s| = |n_g − (n_g · n_y) n_y| the gradient of s along the
 // light. For an environment C_x is the plane's great circle of directions, s = n_g · ω and |∇s| = 1.
-// It is estimated at every vertex of the interior term's camera paths (the unidirectional walk): one area
+// It is estimated at every vertex of the interior term's camera paths (and camera subpaths): one area
 // light whose bounding sphere the plane cuts (chosen uniformly) and a point of C_x by length; every
 // environment emitter at a uniform direction of the great circle. Light that other surfaces reflect across
 // the plane (a moving smooth-shaded object's horizon sweeping over the rest of the scene, or a moving surface
