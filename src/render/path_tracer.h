@@ -130,9 +130,9 @@ Vec3<T> delta_step(const BSDF& bsdf, const SurfaceInteraction3f& hit, const Surf
 //                                             step's factor f_s G J / (G_0 p_σ) to `next` (invalid: escaped along
 //                                             d; weight = f/p in float, delta: a delta lobe was sampled).
 // and optionally
-//   Color3<T> attached_boundary(bsdf, hit, si, depth, rays)   a boundary term of the light scattered at the
-//                                             vertex that no edge carries, as a value-0 quantity whose
-//                                             derivative is the term's (diff/psdr/shading_horizon.h).
+//   optional<Color3<T>> attached_boundary(bsdf, hit, si, depth, rays)   a boundary term that no edge carries
+//                                             of the light scattered at the vertex, as a value-0 quantity whose
+//                                             derivative is the term's, or none (diff/psdr/shading_horizon.h).
 // The primal (T = float on the reference geometry) and paper 001's material-form interior term (T = Var on the
 // moving geometry) are GeometryRule; warped-area sampling (diff/was/warped_area.cpp) and warped-area
 // reparameterization (diff/war/war.cpp) warp the vertices with their fields.
@@ -181,7 +181,8 @@ Color3<T> trace_path(const Scene& scene, Sampler& sampler, const Ray& primary, c
                 L += throughput * contribution * T(w);
             }
             if constexpr (requires { rule.attached_boundary(*bsdf, hit, si, depth, rays); })
-                L += throughput * rule.attached_boundary(*bsdf, hit, si, depth, rays);
+                if (const auto term = rule.attached_boundary(*bsdf, hit, si, depth, rays))
+                    L += throughput * *term;
         } else {
             sampler.next_2d(); // keep the sample stream aligned across materials
         }

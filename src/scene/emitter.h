@@ -17,6 +17,8 @@ struct BoundingSphere {
     Vec3f center;
     float radius = 0.f;
 };
+// The sphere around a mesh's axis-aligned bounding box (centred on the box, radius half its diagonal).
+BoundingSphere bounding_sphere(const TriangleMesh& mesh);
 
 enum EmitterFlags : uint32_t {
     EmitterDeltaPosition = 1u << 0,  // point, spot, projector

@@ -1,7 +1,8 @@
-// TriangleMesh: world-space transformation, validation of loaded data and smooth vertex normals.
+// TriangleMesh: world-space transformation, validation of loaded data, smooth vertex normals and bounds.
 #include "scene/mesh.h"
 
 #include "core/error.h"
+#include "scene/emitter.h"
 
 #include <cmath>
 
@@ -69,6 +70,13 @@ void recompute_vertex_normals(TriangleMesh& mesh) {
         const float length = norm(n);
         if (length > 0.f) n /= length;
     }
+}
+
+BoundingSphere bounding_sphere(const TriangleMesh& mesh) {
+    Vec3f lo(Infinity), hi(-Infinity);
+    for (const Vec3f& p : mesh.positions)
+        lo = min(lo, p), hi = max(hi, p);
+    return {(lo + hi) * 0.5f, norm(hi - lo) * 0.5f};
 }
 
 } // namespace penumbra

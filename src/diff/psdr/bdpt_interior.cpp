@@ -131,9 +131,9 @@ Color3<Var> bidirectional_camera_path(const BDPTPass& pass, const MaterialForm& 
     for (size_t k = 1; horizon && k < camera_path.size(); ++k) {
         const PathVertex& v = camera_path[k];
         const BSDF* bsdf = v.type == VertexType::Surface && z[k].surface ? v.si.bsdf() : nullptr;
-        if (bsdf && bsdf->has(BSDFSmooth))
-            L +=
-                Color3<Var>(v.beta) * horizon->attached_boundary(*bsdf, v.si, z[k].si, unsigned(k - 1), rays);
+        if (!bsdf || !bsdf->has(BSDFSmooth)) continue;
+        if (const auto term = horizon->attached_boundary(*bsdf, v.si, z[k].si, unsigned(k - 1), rays))
+            L += Color3<Var>(v.beta) * *term;
     }
     return L * Color3<Var>(ray_weight) * camera_factor;
 }

@@ -259,9 +259,7 @@ std::vector<uint32_t> shadow_edges(const SceneEdges& edges, const Emitter& emitt
     Vec3f travel(0.f); // directional lights: the direction of the light's rays
     const bool environment = emitter.is_infinite() && !emitter.is_delta();
     if (const Shape* shape = emitter.shape()) {
-        Vec3f lo(Infinity), hi(-Infinity);
-        for (const Vec3f& p : shape->mesh.positions) lo = min(lo, p), hi = max(hi, p);
-        light = {(lo + hi) * 0.5f, norm(hi - lo) * 0.5f};
+        light = bounding_sphere(shape->mesh);
     } else if (!environment) {
         Interaction3f ref;
         ref.p = scene_bounds.center;

@@ -23,6 +23,7 @@
 #include "diff/material_form.h"
 #include "render/path_tracer.h"
 
+#include <optional>
 #include <vector>
 
 namespace penumbra {
@@ -31,10 +32,12 @@ class ShadingHorizon {
   public:
     ShadingHorizon(const Scene& scene, const Parameters& params);
     // The term at the vertex `hit` (si: the same vertex on the tape, its wi set) of a path `depth` bounces
-    // from the camera, per unit path throughput.
-    Color3<Var> sample(const MaterialForm& form, const BSDF& bsdf, const SurfaceInteraction3f& hit,
-                       const SurfaceInteraction<Var>& si, unsigned depth, const PathSettings& settings,
-                       AuxiliaryRng& rng, RayCounter& rays) const;
+    // from the camera, per unit path throughput; none where nothing was drawn (flat shading, no light the
+    // plane cuts), so that such vertices put nothing on the tape.
+    std::optional<Color3<Var>> sample(const MaterialForm& form, const BSDF& bsdf,
+                                      const SurfaceInteraction3f& hit, const SurfaceInteraction<Var>& si,
+                                      unsigned depth, const PathSettings& settings, AuxiliaryRng& rng,
+                                      RayCounter& rays) const;
 
   private:
     struct AreaLight {
@@ -42,15 +45,17 @@ class ShadingHorizon {
         const Shape* shape;
         BoundingSphere bounds;
     };
-    Color3<Var> area_light(const MaterialForm& form, const BSDF& bsdf, const SurfaceInteraction3f& hit,
-                           const SurfaceInteraction<Var>& si, const AreaLight& light, float weight,
-                           const Vec2f& u, RayCounter& rays) const;
-    Color3<Var> environment(const BSDF& bsdf, const SurfaceInteraction3f& hit,
-                            const SurfaceInteraction<Var>& si, const Emitter& emitter, float u,
-                            RayCounter& rays) const;
-    Color3<Var> surfaces(const MaterialForm& form, const BSDF& bsdf, const SurfaceInteraction3f& hit,
-                         const SurfaceInteraction<Var>& si, const PathSettings& reflected, AuxiliaryRng& rng,
-                         RayCounter& rays) const;
+    std::optional<Color3<Var>> area_light(const MaterialForm& form, const BSDF& bsdf,
+                                          const SurfaceInteraction3f& hit, const SurfaceInteraction<Var>& si,
+                                          const AreaLight& light, float weight, const Vec2f& u,
+                                          RayCounter& rays) const;
+    std::optional<Color3<Var>> environment(const BSDF& bsdf, const SurfaceInteraction3f& hit,
+                                           const SurfaceInteraction<Var>& si, const Emitter& emitter, float u,
+                                           RayCounter& rays) const;
+    std::optional<Color3<Var>> surfaces(const MaterialForm& form, const BSDF& bsdf,
+                                        const SurfaceInteraction3f& hit, const SurfaceInteraction<Var>& si,
+                                        const PathSettings& reflected, AuxiliaryRng& rng,
+                                        RayCounter& rays) const;
 
     const Scene& scene_;
     const Parameters& params_;
@@ -64,8 +69,9 @@ struct HorizonRule : GeometryRule<Var, MaterialForm> {
     const ShadingHorizon* horizon;
     PathSettings settings;
     AuxiliaryRng rng;
-    Color3<Var> attached_boundary(const BSDF& bsdf, const SurfaceInteraction3f& hit,
-                                  const SurfaceInteraction<Var>& si, unsigned depth, RayCounter& rays) {
+    std::optional<Color3<Var>> attached_boundary(const BSDF& bsdf, const SurfaceInteraction3f& hit,
+                                                 const SurfaceInteraction<Var>& si, unsigned depth,
+                                                 RayCounter& rays) {
         return horizon->sample(geometry, bsdf, hit, si, depth, settings, rng, rays);
     }
 };
