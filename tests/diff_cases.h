@@ -271,7 +271,7 @@ inline void check_suite_scene(const PaperSuite& paper, const MethodCase& method,
         options.set(key, value);
     const DerivativeImage d = make_method(method.name, options)->derivative(*c.scene, *c.params, run);
     ASSERT_FALSE(d.terms.empty());
-    const DiffCheck total = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const DiffCheck total = check_against(d, fd);
     std::printf("  %s at %dx%d, %s %d spp (%.2f s, %s), reference h = %g at %d spp per side (%.0f s%s)\n"
                 "  %s: %s\n",
                 s.name.c_str(), s.ci_res, s.ci_res, method.label.c_str(), run.spp, d.seconds,

@@ -39,7 +39,7 @@ DiffCheck check_total(Scene& scene, Parameters& params, const DerivativeImage& d
     ro.spp = fd_spp;
     ro.seed = seed;
     const FiniteDifference fd = finite_difference(scene, params, h, ro, 16);
-    const DiffCheck c = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const DiffCheck c = check_against(d, fd);
     std::printf("  %s: %s\n", label, describe(c).c_str());
     return c;
 }
@@ -343,7 +343,7 @@ void expect_tessellated_occluder_shadow_matches(const std::string& light) {
     const DerivativeImage d = psdr_derivative(*scene, params, batched(*scene, 21, 4, 0, 256, 0));
     const StoredReference fd =
         stored_reference({"tessellated_" + light + "_light", {"light=" + light}}, 3e-3);
-    const DiffCheck c = check_against(d.derivative, d.stderr_img, fd.fd.derivative, fd.fd.stderr_img);
+    const DiffCheck c = check_against(d, fd.fd);
     std::printf("  tessellated occluder: %s\n", describe(c).c_str());
     EXPECT_TRUE(c.passes()) << describe(c);
     EXPECT_GT(std::abs(c.comparison.mean_ref), 4.0 * std::abs(c.comparison.mean_ref - c.comparison.mean_test))

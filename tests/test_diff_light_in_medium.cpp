@@ -46,7 +46,7 @@ TEST(LightInMedium, TranslatingPointLightMatchesFiniteDifferences) {
     ro.spp = 1024;
     ro.seed = 99;
     const FiniteDifference fd = finite_difference(*scene, params, 0.02, ro, 16);
-    const DiffCheck c = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const DiffCheck c = check_against(d, fd);
     std::printf("  psdr vs fd: %s\n", describe(c).c_str());
     EXPECT_TRUE(c.passes()) << describe(c);
 }

@@ -73,7 +73,7 @@ TEST_P(MediaScene, MatchesFiniteDifferences) {
     const DerivativeImage d = make_method("psdr", MethodOptions())->derivative(*c.scene, *c.params, run);
     ASSERT_FALSE(d.terms.empty());
     ASSERT_EQ(d.terms[0].name, "interior");
-    const DiffCheck total = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const DiffCheck total = check_against(d, fd);
     const DiffCheck interior =
         check_against(d.terms[0].derivative, d.terms[0].stderr_img, fd.derivative, fd.stderr_img);
     std::printf("  %s at %dx%d, psdr %d spp (%.2f s, %s), reference h = %g at %d spp per side (%.0f s%s)\n"

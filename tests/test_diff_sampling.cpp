@@ -78,7 +78,7 @@ void expect_matches_fd(const std::string& bsdf, const std::string& param, bool d
     params.enable({parse_param_selection(param)});
     const DerivativeImage d = path_sampling_derivative(*scene, params, options(*scene, differential, nee));
     const FiniteDifference& fd = reference(bsdf, param);
-    const DiffCheck c = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const DiffCheck c = check_against(d, fd);
     const std::string name = param + (differential ? " differential" : " bsdf") + (nee ? " +nee" : " -nee");
     EXPECT_TRUE(c.passes()) << name << ": " << describe(c);
     EXPECT_GT(std::abs(c.comparison.mean_ref), 1e-4) << name << ": the reference derivative is ~0, a weak test";
@@ -114,7 +114,7 @@ TEST(PathSampling, CheckerRejectsAWrongDerivative) {
     for (auto& p : d.derivative.pixels) p *= 0.8f;
     for (auto& p : d.stderr_img.pixels) p *= 0.8f;
     const FiniteDifference& fd = reference(GGX, "mat.alpha");
-    const DiffCheck c = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const DiffCheck c = check_against(d, fd);
     EXPECT_FALSE(c.passes()) << describe(c);
 }
 

@@ -70,7 +70,7 @@ TEST_P(WarBoundaryScenes, MatchesFiniteDifferences) {
     LoadedCase l = load(c);
     const FiniteDifference fd = reference(c, l);
     const DerivativeImage d = war(l, Spp, 3 + 1000 * seed, aux(c));
-    const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const DiffCheck check = check_against(d, fd);
     std::printf("  %s, %d spp in %.1f s: %s\n", c.label.c_str(), Spp, d.seconds, describe(check).c_str());
     EXPECT_TRUE(check.passes()) << describe(check);
 }
@@ -104,7 +104,7 @@ TEST(WarEnvironment, RectangleOverTheEnvironmentMatchesFiniteDifferences) {
     l.params->enable({parse_param_selection("rectangle.translate=1,0,0")});
     const FiniteDifference fd = stored_reference({"rectangle_over_environment", {}}, 0.008).fd;
     const DerivativeImage d = method_derivative("war", {}, l, 256, 7 + 1000 * test_seed(), 8);
-    const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const DiffCheck check = check_against(d, fd);
     std::printf("  rectangle over the environment, 256 spp in %.1f s: %s\n", d.seconds,
                 describe(check).c_str());
     EXPECT_TRUE(check.passes()) << describe(check);

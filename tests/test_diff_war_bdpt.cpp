@@ -53,7 +53,7 @@ TEST_P(WarBdptBoundaryScenes, MatchesFiniteDifferences) {
     LoadedCase l = load(c);
     const FiniteDifference fd = stored_war_reference_or_throw(c, Res);
     const DerivativeImage d = method_derivative("war-bdpt", options(c), l, Spp, 7 + 1000 * seed, 16);
-    const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const DiffCheck check = check_against(d, fd);
     std::printf("  %s, %d spp in %.1f s: %s\n", c.label.c_str(), Spp, d.seconds, describe(check).c_str());
     EXPECT_TRUE(check.passes()) << describe(check);
 }

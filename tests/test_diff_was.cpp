@@ -51,7 +51,7 @@ TEST_P(WasBoundaryScenes, MatchesFiniteDifferences) {
     LoadedCase l = load(c);
     const FiniteDifference fd = stored_war_reference_or_throw(c, 16);
     const DerivativeImage d = was(l, Spp, {}, 3 + 1000 * seed);
-    const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const DiffCheck check = check_against(d, fd);
     std::printf("  %s (%s), %d spp in %.1f s: %s\n", c.label.c_str(), d.description.c_str(), Spp, d.seconds,
                 describe(check).c_str());
     EXPECT_TRUE(check.passes()) << describe(check);
@@ -69,7 +69,7 @@ TEST(WasUnbiased, MatchesFiniteDifferences) {
         LoadedCase l = load(c);
         const FiniteDifference fd = stored_war_reference_or_throw(c, 16);
         const DerivativeImage d = was(l, 2 * Spp, {{"was-unbiased", "true"}}, 5 + 1000 * seed);
-        const DiffCheck check = check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+        const DiffCheck check = check_against(d, fd);
         std::printf("  %s (%s), %d spp in %.1f s: %s\n", c.label.c_str(), d.description.c_str(), 2 * Spp,
                     d.seconds, describe(check).c_str());
         EXPECT_TRUE(check.passes()) << c.label << ": " << describe(check);

@@ -368,8 +368,7 @@ TEST(FilmOptions, FilmEdgeTermUnderCameraMotion) {
     ro.spp = 512;
     ro.seed = 17;
     const FiniteDifference fd = finite_difference(*scene, params, 1e-2, ro, 16);
-    const test::DiffCheck total =
-        test::check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const test::DiffCheck total = test::check_against(d, fd);
     const test::DiffCheck interior = test::check_against(
         d.term("interior").derivative, d.term("interior").stderr_img, fd.derivative, fd.stderr_img);
     std::printf("  film edge, cam.translate: interior+pixel %s\n  interior only %s\n",

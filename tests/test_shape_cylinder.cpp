@@ -146,7 +146,7 @@ TEST(ShapeCylinder, TranslateDerivativeMatchesFiniteDifferences) {
     ro.spp = 256;
     ro.seed = 5;
     const FiniteDifference fd = finite_difference(*scene, params, 2e-3, ro, 16);
-    const test::DiffCheck c = test::check_against(d.derivative, d.stderr_img, fd.derivative, fd.stderr_img);
+    const test::DiffCheck c = test::check_against(d, fd);
     RecordProperty("check", test::describe(c));
     EXPECT_TRUE(c.passes()) << test::describe(c);
 }

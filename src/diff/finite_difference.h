@@ -11,6 +11,7 @@ struct FiniteDifference {
     Image derivative;  // (I(θ0 + h) − I(θ0 − h)) / 2h along the enabled direction
     Image stderr_img;  // per-pixel standard error from independent batches (empty with one batch)
     double seconds = 0;
+    double mean_stderr = 0; // of the image's mean, from the batches' means (0 with one batch, or stored)
 };
 
 // Renders with the scene's integrator at θ0 ± h·direction (same seeds on both sides, film positions stratified

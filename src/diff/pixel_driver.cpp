@@ -193,11 +193,13 @@ DerivativeImage pixel_derivative(const PixelLoop& loop) {
     DerivativeImage result;
     result.derivative = derivative.mean();
     result.stderr_img = derivative.standard_error();
+    result.mean_stderr = derivative.mean_standard_error();
     result.primal = primal.mean();
     result.description = loop.description;
     result.cost = cost.get();
     result.seconds = seconds_since(loop.start);
-    result.terms.push_back({loop.term, result.derivative, result.stderr_img, result.cost, result.seconds});
+    result.terms.push_back(
+        {loop.term, result.derivative, result.stderr_img, result.cost, result.seconds, result.mean_stderr});
     return result;
 }
 

@@ -20,6 +20,7 @@ struct DerivativeTerm {
     Image stderr_img; // empty with a single batch
     SampleCost cost;
     double seconds = 0;
+    double mean_stderr = 0; // of the image's mean, from the batches' means (DerivativeImage::mean_stderr)
 };
 
 struct DerivativeImage {
@@ -28,8 +29,9 @@ struct DerivativeImage {
     Image primal;     // the image estimated from the same samples (detached values; may be empty)
     std::vector<DerivativeTerm>
         terms; // the method's terms separately (`penumbra derivative --terms`), or none
-    // dpm: the standard error of the image's mean from the spread of the batches' means (its pixels share
-    // photons: their errors correlate); 0 elsewhere.
+    // The standard error of the image's mean (over pixels and channels) from the spread of the batches'
+    // means: pixel errors correlate (a sample splats over the filter's pixels, a path carries all three
+    // channels, photons are shared), so sqrt(Σσ²)/N understates it. 0 with a single batch.
     double mean_stderr = 0;
     std::string description;           // one line for the log ("interior + boundary terms (...)")
     std::vector<std::string> warnings; // what the estimate leaves out, for the user

@@ -283,7 +283,7 @@ DerivativeImage dpm_derivative(const Scene& scene, const Parameters& params, con
     out.cost.dropped = dropped.load();
     out.seconds = seconds_since(start);
     out.terms.push_back({o.variant == DpmVariant::C ? "photon-mapping" : "contribution", out.derivative,
-                         out.stderr_img, out.cost, out.seconds});
+                         out.stderr_img, out.cost, out.seconds, out.mean_stderr});
     if (screen) {
         out.terms.push_back({"screen_x", x_batches.mean(), x_batches.standard_error(), {}, 0.0});
         out.terms.push_back({"screen_y", y_batches.mean(), y_batches.standard_error(), {}, 0.0});

@@ -342,6 +342,24 @@ Var sheet_velocity(const Vec3<Var>& src, const Vec3<Var>& a, const Vec3<Var>& b,
 
 } // namespace
 
+FlightEnd flight_from_edge(const Scene& scene, const EdgePoint& x_b, const Vec3f& dir, const Medium* medium,
+                           bool volume_vertices, Sampler& sampler, RayCounter& rays) {
+    const auto own_face = [&](const FlightEnd& f) {
+        return f.kind == FlightEnd::Kind::Surface && f.si.shape == x_b.edge->shape &&
+               (int32_t(f.si.prim_index) == x_b.edge->edge.f0 ||
+                int32_t(f.si.prim_index) == x_b.edge->edge.f1);
+    };
+    FlightEnd end = sample_interaction(scene, Ray(x_b.p + dir * ray_offset_scale(x_b.p), dir), medium,
+                                       volume_vertices, sampler, rays);
+    for (int k = 0; k < 2 && own_face(end); ++k) {
+        const Color3f passed = end.weight;
+        end = sample_interaction(scene, Ray(end.p + dir * ray_offset_scale(end.p), dir), end.medium,
+                                 volume_vertices, sampler, rays);
+        end.weight = end.weight * passed;
+    }
+    return own_face(end) ? FlightEnd{} : end;
+}
+
 BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext& context,
                                        const SegmentSource& source, const EdgePoint& x_b, Sampler& sampler,
                                        RayCounter& rays, const std::optional<Contact>& contact) {
@@ -389,7 +407,9 @@ BoundarySegment trace_boundary_segment(const Scene& scene, const SegmentContext&
         return out;
     }
     const FlightEnd end =
-        sample_interaction(scene, Ray(x_b.p + dir * ray_offset_scale(x_b.p), dir), medium, context.volume_endpoints, sampler, rays);
+        source.crease ? sample_interaction(scene, Ray(x_b.p + dir * ray_offset_scale(x_b.p), dir), medium,
+                                           context.volume_endpoints, sampler, rays)
+                      : flight_from_edge(scene, x_b, dir, medium, context.volume_endpoints, sampler, rays);
     if (end.kind == FlightEnd::Kind::None || end.kind == FlightEnd::Kind::Escaped) return out;
     if (end.kind == FlightEnd::Kind::Surface && !end.si.bsdf()) return out;
     out.transmittance = tr * end.weight;

@@ -19,6 +19,7 @@
 #include "core/distribution.h"
 #include "diff/edges.h"
 #include "diff/material_form.h"
+#include "diff/media_walk.h"
 #include "render/integrator.h"
 
 #include <optional>
@@ -81,6 +82,13 @@ bool sample_grazing_direction(const SceneEdges::SceneEdge& edge, const Vec2f& u,
 // both faces: from a point on such a line the edge is a crease, not a silhouette), with its solid-angle
 // density: the mirror image of the wedge, of measure 2φ. False for other edges.
 bool sample_crease_direction(const SceneEdges::SceneEdge& edge, const Vec2f& u, Vec3f& d, float& pdf);
+
+// The free flight (sample_interaction) from the edge point x_B along a direction `dir` that grazes the edge,
+// past hits on the edge's own faces: a grazing line meets them on the edge only, and a hit a hair's breadth
+// beyond x_B is the ray's rounding (a receiver or source at a grazing angle, with a huge weight). None
+// (Kind::None) if they persist.
+FlightEnd flight_from_edge(const Scene& scene, const EdgePoint& x_b, const Vec3f& dir, const Medium* medium,
+                           bool volume_vertices, Sampler& sampler, RayCounter& rays);
 
 // The source endpoint x_S0: a point with its surface normal (zero for point lights) and, when it lies on a
 // shape, its material point (which moves with the shape); or, for directional and environment emitters, a

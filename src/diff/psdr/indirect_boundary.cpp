@@ -117,8 +117,8 @@ BoundarySegment add_lit_side(const Scene& scene, const SegmentContext& context, 
     const Medium* edge_medium = !context.media                              ? nullptr
                                 : edge_shape.interior || edge_shape.exterior ? edge_shape.exterior.get()
                                                                              : medium_at(scene, x_b.p, rays);
-    const FlightEnd x_s0 = sample_interaction(scene, Ray(x_b.p - w_b * ray_offset_scale(x_b.p), w_b * -1.f), edge_medium,
-                                              context.volume_endpoints, sampler, rays);
+    const FlightEnd x_s0 =
+        flight_from_edge(scene, x_b, w_b * -1.f, edge_medium, context.volume_endpoints, sampler, rays);
     SegmentSource source{.p = x_s0.p, .n = Vec3f(0.f), .medium = x_s0.medium, .in_medium = true, .from_edge = true,
                          .edge_medium = edge_medium};
     if (x_s0.kind == FlightEnd::Kind::Surface) {

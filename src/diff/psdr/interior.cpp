@@ -103,7 +103,8 @@ void set_interior_samples(PixelLoop& loop, std::shared_ptr<const MaterialForm> f
         bidirectional_interior(scene, options.estimator)
             ? std::make_shared<const BDPTPass>(bidirectional_pass(scene, settings))
             : nullptr;
-    const auto horizon = std::make_shared<const ShadingHorizon>(scene, loop.params);
+    const auto horizon =
+        options.shading_horizon ? std::make_shared<const ShadingHorizon>(scene, loop.params) : nullptr;
     loop.tiles = per_sample([&scene, form, media, bdpt, horizon, antithetic, spp,
                              settings](Sampler& sampler, const PixelSample& s, RayCounter& rays) {
         const bool mirror = antithetic && (s.m & 1);

@@ -19,6 +19,8 @@ struct DiffOptions : PixelOptions {
     bool antithetic = true;    // pixel-level antithetic pairs (paper 001 §5.1, Fig. 6; material-form first vertex)
     FirstVertex first_vertex = FirstVertex::Auto; // diff/first_vertex.h
     InteriorEstimator estimator = InteriorEstimator::Auto; // diff/psdr/bdpt_interior.h
+    // The shading horizon's boundary at every vertex (diff/psdr/shading_horizon.h); false only to measure it.
+    bool shading_horizon = true;
 };
 
 

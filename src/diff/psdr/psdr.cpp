@@ -14,12 +14,12 @@ namespace penumbra {
 namespace {
 
 // Mean and standard error over batches of a boundary term (run with independent seeds).
-void boundary_batches(const Scene& scene, const Parameters& params, const PsdrOptions& options, const BoundaryTerm& term,
-                      int spp, uint64_t salt, Image& mean, Image& stderr_img, SampleCost& cost) {
+void boundary_batches(const Scene& scene, const Parameters& params, const PsdrOptions& options,
+                      const BoundaryTerm& term, int spp, uint64_t salt, DerivativeTerm& out) {
     const Film& film = *scene.sensor->film;
     const int B = options.interior.batches;
-    mean = Image(film.width, film.height);
-    if (B > 1) stderr_img = Image(film.width, film.height);
+    out.derivative = Image(film.width, film.height);
+    if (B > 1) out.stderr_img = Image(film.width, film.height);
     if (spp <= 0) return;
     ImageBatches batches;
     for (int b = 0; b < B; ++b) {
@@ -31,11 +31,12 @@ void boundary_batches(const Scene& scene, const Parameters& params, const PsdrOp
         bo.first_vertex = options.interior.first_vertex;
         bo.guiding = options.guiding;
         bo.volume_endpoints = options.volume_boundary;
-        bo.cost = &cost;
+        bo.cost = &out.cost;
         batches.add(term.derivative(params, bo));
     }
-    mean = batches.mean();
-    if (B > 1) stderr_img = batches.standard_error();
+    out.derivative = batches.mean();
+    if (B > 1) out.stderr_img = batches.standard_error();
+    out.mean_stderr = batches.mean_standard_error();
 }
 
 // The primary, direct and indirect boundary terms connect surface points to a single center of projection:
@@ -104,8 +105,7 @@ DerivativeImage psdr_derivative(const Scene& scene, const Parameters& params, co
     for (size_t k = 1; k < terms.size(); ++k) {
         const BoundaryTerms::Term& t = boundary.terms()[k - 1];
         const auto term_start = std::chrono::steady_clock::now();
-        boundary_batches(scene, params, options, t.estimator, t.spp, t.salt, terms[k].derivative,
-                         terms[k].stderr_img, terms[k].cost);
+        boundary_batches(scene, params, options, t.estimator, t.spp, t.salt, terms[k]);
         terms[k].seconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - term_start).count();
     }
@@ -128,11 +128,14 @@ DerivativeImage psdr_derivative(const Scene& scene, const Parameters& params, co
                                                float(std::sqrt(variance.z)));
     }
     const bool pixel_term = needs_pixel_boundary(scene, params, options.interior.first_vertex);
+    double mean_variance = 0;
     for (size_t k = 0; k < terms.size(); ++k) {
         out.cost += terms[k].cost;
+        mean_variance += terms[k].mean_stderr * terms[k].mean_stderr;
         terms[k].name = PsdrTermNames[k];
         if (k + 1 < terms.size() || pixel_term) out.terms.push_back(std::move(terms[k]));
     }
+    out.mean_stderr = std::sqrt(mean_variance);
     out.description = describe(options);
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return out;

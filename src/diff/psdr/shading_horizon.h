@@ -64,7 +64,8 @@ class ShadingHorizon {
     std::vector<const Emitter*> environments_;
 };
 
-// The interior term's vertex rule: the material form's, with the shading horizon attached at every vertex.
+// The interior term's vertex rule: the material form's, with the shading horizon attached at every vertex
+// (none where `horizon` is null).
 struct HorizonRule : GeometryRule<Var, MaterialForm> {
     const ShadingHorizon* horizon;
     PathSettings settings;
@@ -72,6 +73,7 @@ struct HorizonRule : GeometryRule<Var, MaterialForm> {
     std::optional<Color3<Var>> attached_boundary(const BSDF& bsdf, const SurfaceInteraction3f& hit,
                                                  const SurfaceInteraction<Var>& si, unsigned depth,
                                                  RayCounter& rays) {
+        if (!horizon) return std::nullopt;
         return horizon->sample(geometry, bsdf, hit, si, depth, settings, rng, rays);
     }
 };
