@@ -17,6 +17,7 @@
 #pragma once
 #include "diff/finite_difference.h"
 #include "diff/psdr/interior.h"
+#include "diff/psdr/psdr.h"
 
 #include <gtest/gtest.h>
 
@@ -81,6 +82,22 @@ inline DiffCheck check_against(const DerivativeImage& d, const FiniteDifference&
                                  fd.mean_stderr > 0 ? fd.mean_stderr : pixel_formula(fd.stderr_img));
     if (se > 0) c.comparison.mean_z = (c.comparison.mean_test - c.comparison.mean_ref) / se;
     return c;
+}
+
+// psdr over 16 batches (for standard errors) with the given per-batch budgets: interior, primary, direct,
+// indirect and pixel.
+inline PsdrOptions batched(const Scene& scene, uint64_t seed, int interior, int primary, int direct,
+                           int indirect, int pixel = 0) {
+    PsdrOptions o;
+    o.interior.spp = interior;
+    o.interior.batches = 16;
+    o.interior.seed = seed;
+    o.interior.path = path_settings(scene);
+    o.primary_spp = primary;
+    o.direct_spp = direct;
+    o.indirect_spp = indirect;
+    o.pixel_spp = pixel;
+    return o;
 }
 
 struct DerivativePair {

@@ -18,20 +18,6 @@ namespace {
 
 const std::string validation = std::string(PENUMBRA_SOURCE_DIR) + "/scenes/validation/";
 
-// 16 batches (for standard errors) with the given per-batch budgets: interior, primary, direct, indirect and pixel.
-PsdrOptions batched(const Scene& scene, uint64_t seed, int interior, int primary, int direct, int indirect, int pixel = 0) {
-    PsdrOptions o;
-    o.interior.spp = interior;
-    o.interior.batches = 16;
-    o.interior.seed = seed;
-    o.interior.path = path_settings(scene);
-    o.primary_spp = primary;
-    o.direct_spp = direct;
-    o.indirect_spp = indirect;
-    o.pixel_spp = pixel;
-    return o;
-}
-
 // The psdr total against central differences (16 batches of `fd_spp` samples per pixel, step h); prints it.
 DiffCheck check_total(Scene& scene, Parameters& params, const DerivativeImage& d, double h, int fd_spp,
                       uint64_t seed, const char* label) {

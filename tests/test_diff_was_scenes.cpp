@@ -37,21 +37,18 @@ class WasScene : public testing::TestWithParam<std::tuple<std::string, std::stri
 // estimate is fireflies (256 spp: relerr ~7 with a noise expectation of ~5, ~60% of the blocks beyond 4σ, the
 // batch standard errors do not hold; paper 004 §6, Fig. 13).
 //
-// psdr on corkscrew: with the image-space first vertex (auto's choice here) the derivative keeps a small bias
-// (4096 spp: relerr4 0.067 against a noise expectation of 0.035, seed against seed 0.047 against 0.038,
-// against references at 0.05 and 0.025 rad that agree; it was 0.18, z ≈ −8 before the primary term took the
-// edges' sides on their own faces); at the CI budget 2 of 10 seeds fail (seed 1: relerr4 0.181 against a
-// limit of 0.171; seed 3: z −4.9). The smooth-shaded tube's horizons (diff/psdr/shading_horizon.h, the light
-// crossing its turning faces' planes) were a missing term in both forms: with them the material form's mean
-// is right (4096 spp, three seeds: +0.00019 → −0.00005 against +0.00001), and the image-space form's moves by
-// the same −0.00025 to −0.00022: its own bias, of the opposite sign, had hidden the missing term (seed 3 at
-// the CI budget: z −4.3).
+// psdr on corkscrew passed no test before the primary term took the horizon creases of smooth shading
+// (diff/psdr/primary_boundary.cpp, lune_may_be_lit): with the image-space first vertex (auto's choice here)
+// every interior edge of the turning tube is an image discontinuity, the two faces hiding different
+// half-spaces from the light. Before (4096 spp, seed 1): relerr4 0.082 against a noise expectation of 0.033,
+// mean −0.00042 against FD +0.00001 (z −11.5); with them 0.038 and 0.034 against 0.032–0.033 (seeds 1, 2),
+// means −0.00004 and +0.00002. At the CI budget seeds 0–3 pass (relerr4 0.086–0.130 against 0.091–0.095).
 // was on hedge: the consistent estimate (N' = 32) is half the reference (256 spp: mean −0.058 against
 // −0.123, z +7.6) and takes 175 s at 32 × 32 on two cores (auxiliary rays at every vertex among 220k
 // triangles): measured in the study (docs/warped-area-sampling.md), not in CI.
 // was on corkscrew: the paper's κ = 1e4 leaves the consistent estimate biased (1024 spp: relerr4 0.45 against
-// a noise expectation of 0.32, z −3.4, 2.3% of the 2 × 2 blocks beyond 4σ; it was 0.63 against 0.37 before the
-// boundary test took creases and the film warp the jackknife); its OPTIM-CORKSCREW used κ = 5e5 for that
+// a noise expectation of 0.32, z −3.4, 2.3% of the 2 × 2 blocks beyond 4σ; it was 0.63 against 0.37 before
+// the boundary test took creases and the film warp the jackknife); its OPTIM-CORKSCREW used κ = 5e5 for that
 // reason (§6). With κ = 1e5 the bias goes (before those changes: 1024 spp, relerr4 0.64 against 0.44, z −0.5)
 // and heavier tails come: 3.9% of the 2 × 2 blocks beyond their batch standard errors' 4σ.
 // The unbiased variant is checked on the corkscrew too.
@@ -64,9 +61,6 @@ const char* open_problem(const std::string& label, const std::string& scene) {
         return "the consistent warped-area estimate is biased on the hedge at N' = 32, and slow at test budgets";
     if (label.rfind("psdr", 0) == 0 && scene == "hedge")
         return "edge sampling's indirect term is fireflies on the hedge's glossy reflection at test budgets";
-    if (label == "psdr" && scene == "corkscrew")
-        return "the image-space first vertex keeps a small bias on the rotating corkscrew "
-               "(relerr4 1.9x noise at 4096 spp)";
     return nullptr;
 }
 

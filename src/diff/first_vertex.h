@@ -2,8 +2,9 @@
 //   image space: the camera ray through a film position is fixed and x1(θ) slides along it on the moving
 //                surface (its barycentrics depend on θ); the pixel filter does not move, so neither the
 //                filter gradient nor pixel edges contribute, and the discontinuities of the image are the
-//                edges that the camera sees move: silhouettes, and creases of meshes shaded with face
-//                normals.
+//                edges that the camera sees move: silhouettes, creases of meshes shaded with face normals,
+//                and the edges of smooth-shaded solids where light arrives between the two faces' planes
+//                (each face hides the half-space below its own plane: diff/psdr/primary_boundary.cpp).
 //   material:    x1 = X(p1, θ) at a fixed material point (paper 001 §4.1); the film position s(x1(θ)) moves,
 //                so the filter's gradient (interior term) and, for a box filter, its jumps at pixel edges
 //                (the pixel-boundary term) carry the image-space motion.

@@ -7,6 +7,7 @@
 #include "diff/media_walk.h"
 #include "diff/psdr/boundary_segment.h"
 #include "diff/psdr/shading_terminator.h"
+#include "render/light_medium.h"
 #include "render/volume_visibility.h"
 #include "scene/texture.h"
 
@@ -20,7 +21,8 @@ namespace penumbra {
 
 // The edges whose image the primary term samples: silhouettes seen from the reference camera and, with the
 // image-space first vertex, creases where the shading jumps (face normals, hard edges, uv seams of textured
-// shapes). Each keeps
+// shapes) or where the solid hides a different half-space on either side (the horizon creases of smooth
+// shading: lune_may_be_lit). Each keeps
 // the part of the edge that lies in front of the camera and projects within the film (plus the filter's
 // reach), with its projection. With the image-space first vertex and a perspective camera, also the triangles
 // of moving smooth-normal shapes that the shading terminator crosses (diff/psdr/shading_terminator.h).
@@ -29,6 +31,7 @@ struct PrimaryBoundary::Silhouettes {
         const Shape* shape;
         Edge edge;
         bool crease;      // a shading discontinuity between two visible faces (not a silhouette)
+        float prior;      // sampling weight per unit length before guiding (1; a horizon crease: wedge²)
         float tau0, tau1; // the part kept: edge parameters (v0 → v1) of its ends
         Vec2f s0, s1;     // their film positions (pixels)
         float z0, z1;     // their depths along the view direction (perspective-correct interpolation)
@@ -39,6 +42,7 @@ struct PrimaryBoundary::Silhouettes {
         uint32_t prim;
     };
     std::vector<float> lengths;        // of the edges' images
+    std::vector<float> weights;        // their lengths times their priors (before guiding)
     std::vector<TerminatorTriangle> terminators;
     std::vector<float> terminator_weights; // the triangles' image sizes (pixels)
     // Over the edges, then the terminator triangles; points are uniform along an edge's image, and b1 is
@@ -95,6 +99,66 @@ bool shading_jumps(const Shape& shape, const Edge& e, bool textured) {
     return false;
 }
 
+// What can shine between the planes of two faces that meet at an edge of a smooth-shaded solid. Each face
+// takes light from below its own plane (its BSDF sees the interpolated normal) and the solid hides it there
+// (diff/psdr/shading_horizon.h), so light arriving between the two planes reaches one side of the edge and
+// not the other: the radiance jumps across the edge although the shading normals are continuous. Light that
+// other surfaces reflect (paths of three or more segments), an environment and a medium's in-scattering can
+// come from any direction; otherwise an emitter must reach into the wedge between the planes.
+struct LuneLights {
+    bool everywhere = false;
+    std::vector<std::pair<const Shape*, BoundingSphere>> bounds; // area (its shape), point and spot lights
+    std::vector<Vec3f> directions;                               // toward directional lights
+};
+
+LuneLights lune_lights(const Scene& scene, const PathSettings& path) {
+    LuneLights out;
+    out.everywhere = path.max_depth < 0 || path.max_depth > 2 || scene_has_media(scene);
+    Interaction3f ref;
+    ref.p = scene.bounding_sphere().center;
+    for (const auto& e : scene.emitters) {
+        if (e->is_infinite() && !e->is_delta())
+            out.everywhere = true;
+        else if (const Shape* shape = e->shape())
+            out.bounds.push_back({shape, bounding_sphere(shape->mesh)});
+        else if (e->is_infinite())
+            out.directions.push_back(e->sample_direction(ref, Vec2f(0.5f)).first.d);
+        else
+            out.bounds.push_back({nullptr, {e->sample_direction(ref, Vec2f(0.5f)).first.p, 0.f}});
+    }
+    return out;
+}
+
+// Horizon creases flatter than this are left out: their jump is of the order of the wedge's angle squared
+// (below 0.8% of the light arriving along the planes), less than the sides' own offsets resolve (each side is
+// probed a few ray offsets from the edge, and a smooth gradient across that gap reads as a jump which the
+// faint edge's low sampling density multiplies: a 64 x 128 sphere's 2.8° edges and its quads' near-flat
+// diagonals turned a sliding ball's derivative to noise).
+constexpr float MinHorizonWedge = 5.f * Pi / 180.f;
+
+// Whether light may arrive between the planes of edge e's faces (above one, below the other), and the
+// wedge's angle between them in `wedge` (radians). A mesh light does not shine on its own edges (a convex
+// emitter cannot, and a concave one's light across its own creases is left out).
+bool lune_may_be_lit(const LuneLights& lights, const Shape& shape, const Edge& e, float& wedge) {
+    const TriangleMesh& m = shape.mesh;
+    if (e.f1 < 0) return false;
+    const Vec3f a = m.positions[e.v0];
+    const Vec3f n0 = normalize(face_normal(m, e.f0)), n1 = normalize(face_normal(m, e.f1));
+    wedge = std::acos(std::clamp(dot(n0, n1), -1.f, 1.f));
+    if (!(wedge > MinHorizonWedge)) return false;
+    if (lights.everywhere) return true;
+    for (const auto& [emitter_shape, b] : lights.bounds) {
+        if (emitter_shape == &shape) continue;
+        const float d0 = dot(n0, b.center - a), d1 = dot(n1, b.center - a);
+        if ((d0 > -b.radius && d1 < b.radius) || (d1 > -b.radius && d0 < b.radius)) return true;
+    }
+    for (const Vec3f& d : lights.directions) {
+        const float s0 = dot(n0, d * -1.f), s1 = dot(n1, d * -1.f);
+        if ((s0 > 0.f) != (s1 > 0.f)) return true;
+    }
+    return false;
+}
+
 // The sampling weights: the edges' (`edge_weights`), then the terminator triangles'.
 std::vector<float> all_weights(const Silhouettes& sil, std::vector<float> edge_weights) {
     edge_weights.insert(edge_weights.end(), sil.terminator_weights.begin(), sil.terminator_weights.end());
@@ -137,8 +201,9 @@ void find_terminators(const Scene& scene, const Parameters& params, const Vec2f&
     }
 }
 
-std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdges& edges, const Parameters& params,
-                                              bool image_space) {
+std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdges& edges,
+                                              const Parameters& params, bool image_space,
+                                              const PathSettings& path) {
     const Sensor& sensor = *scene.sensor;
     const Film& film = *sensor.film;
     const bool parallel = parallel_projection(sensor);
@@ -151,6 +216,7 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
     Silhouettes& out = *result;
     out.image_space = image_space;
     out.media = edges.media;
+    const LuneLights lights = image_space ? lune_lights(scene, path) : LuneLights{};
     const Shape* textured_shape = nullptr; // the shape `textured` was last found for (edges come shape by shape)
     bool textured = false;
     for (const SceneEdges::SceneEdge& se : edges.edges) {
@@ -160,13 +226,20 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
         const Edge& e = se.edge;
         const bool silhouette = parallel ? is_silhouette_parallel(m, e, forward) : is_silhouette(m, e, eye);
         bool crease = false;
+        float prior = 1.f;
         if (!silhouette) {
             if (!image_space) continue;
             if (se.shape != textured_shape) { // a uv seam is a discontinuity where a texture varies
                 textured_shape = se.shape;
                 textured = has_texture(*const_cast<Shape*>(se.shape), [](const Texture& t) { return !t.is_constant(); });
             }
-            if (!shading_jumps(*se.shape, e, textured)) continue;
+            // A horizon crease's jump is the light in the wedge between the planes, at grazing incidence: of
+            // the order of the wedge's angle squared against a silhouette's (its prior before guiding).
+            float wedge = 0.f;
+            if (!shading_jumps(*se.shape, e, textured)) {
+                if (!lune_may_be_lit(lights, *se.shape, e, wedge)) continue;
+                prior = std::min(wedge * wedge, 1.f);
+            }
             // On a solid, creases between faces turned away from the camera are hidden by the solid itself.
             const Vec3f to_eye = parallel ? forward * -1.f : eye - m.positions[e.v0];
             if (se.closed && !(dot(face_normal(m, e.f0), to_eye) * (se.inside_out ? -1.f : 1.f) > 0.f))
@@ -188,17 +261,20 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
         float t0, t1;
         if (!clip_to_box(sa, sb, lo, hi, t0, t1)) continue;
         const float u0 = perspective_correct(t0, z_a, z_b, parallel), u1 = perspective_correct(t1, z_a, z_b, parallel);
-        Silhouettes::SilhouetteEdge kept{se.shape, e, crease, tau0 + (tau1 - tau0) * u0, tau0 + (tau1 - tau0) * u1,
-                                         sa + (sb - sa) * t0, sa + (sb - sa) * t1, z_a + (z_b - z_a) * u0,
-                                         z_a + (z_b - z_a) * u1};
+        Silhouettes::SilhouetteEdge kept;
+        kept.shape = se.shape, kept.edge = e, kept.crease = crease, kept.prior = prior;
+        kept.tau0 = tau0 + (tau1 - tau0) * u0, kept.tau1 = tau0 + (tau1 - tau0) * u1;
+        kept.s0 = sa + (sb - sa) * t0, kept.s1 = sa + (sb - sa) * t1;
+        kept.z0 = z_a + (z_b - z_a) * u0, kept.z1 = z_a + (z_b - z_a) * u1;
         const float length = std::sqrt(sqr(kept.s1.x - kept.s0.x) + sqr(kept.s1.y - kept.s0.y));
         if (!(length > 0.f) || !std::isfinite(length)) continue;
         out.edges.push_back(kept);
         out.lengths.push_back(length);
+        out.weights.push_back(length * prior);
     }
     if (image_space && sensor.projects_points() && !parallel) find_terminators(scene, params, lo, hi, out);
     if (!out.lengths.empty() || !out.terminators.empty())
-        out.distribution = DiscreteDistribution(all_weights(out, out.lengths));
+        out.distribution = DiscreteDistribution(all_weights(out, out.weights));
     return result;
 }
 
@@ -239,6 +315,9 @@ struct EdgeCrossing {
     // curve (hit[0] on the edge's face, hit[1] on the surface) and at 2δ (twice_hit, the far one seen along
     // twice_ray), for their limits at the curve (probe_contact).
     bool contact = false;
+    // A horizon crease (SilhouetteEdge::prior < 1): both sides on their faces at δ and 2δ from the edge as
+    // well (twice_hit, seen along the same probes), for the limits at the edge.
+    bool extrapolate = false;
     Ray twice_ray;
     SurfaceInteraction3f twice_hit[2];
     Color3f twice_weight;
@@ -370,10 +449,21 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
             return out.hit[k].is_valid() && out.hit[k].shape == se.shape && std::abs(out.hit[k].t - d) < 0.02f * d;
         };
         if (!at_edge(0) && !at_edge(1)) return out;
-        for (int k = 0; k < 2; ++k)
-            out.hit[k] = own_face(*se.shape, se.edge, out.tau, out.ray[k], 2.f * ray_offset_scale(x_edge));
-        out.valid =
-            out.hit[0].is_valid() && out.hit[1].is_valid() && out.hit[0].prim_index != out.hit[1].prim_index;
+        // A horizon crease's jump is faint next to the radiance's gradient across the edge (the light it
+        // takes arrives along the planes), and the sides' distance δ from the edge reads that gradient as a
+        // jump of order δ: the limits at the edge are extrapolated from δ and 2δ (2 L(δ) − L(2δ)).
+        const float delta = 2.f * ray_offset_scale(x_edge);
+        out.extrapolate = se.prior < 1.f;
+        for (int k = 0; k < 2; ++k) {
+            out.hit[k] = own_face(*se.shape, se.edge, out.tau, out.ray[k], delta);
+            if (out.extrapolate)
+                out.twice_hit[k] = own_face(*se.shape, se.edge, out.tau, out.ray[k], 2.f * delta);
+        }
+        out.twice_ray = out.ray[1];
+        out.twice_weight = out.weight[1];
+        out.valid = out.hit[0].is_valid() && out.hit[1].is_valid() &&
+                    out.hit[0].prim_index != out.hit[1].prim_index &&
+                    (!out.extrapolate || (out.twice_hit[0].is_valid() && out.twice_hit[1].is_valid()));
         return out;
     }
     // A silhouette: order the sides so that the first is the edge's own (near) one, n pointing to the other.
@@ -432,14 +522,15 @@ ArrivingRadiance far_side(const Scene& scene, const EdgeCrossing& c, const Ray& 
 // common to both sides, is left out (only the far side beyond the edge's depth, `far`, is estimated; in
 // material form the medium's points in front of the edge are not cut either). A crease's two sides share
 // their random numbers (light samples, BSDF samples), so that their difference is the jump rather than the
-// noise of two estimates. At a contact each side is its limit at the curve (probe_contact).
+// noise of two estimates. At a contact, and at a horizon crease, each side is its limit at the edge (2 L(δ) −
+// L(2δ)).
 Color3f jump(const Scene& scene, const EdgeCrossing& c, bool image_space, bool media, const PathSettings& settings,
              Sampler& sampler, RayCounter& rays, ArrivingRadiance* far = nullptr) {
     Sampler shared = sampler;
     // A side's radiance from its probe k (0: at δ from the curve, 1: at 2δ); at a contact its limit at the
     // curve, 2 L(δ) − L(2δ), both probes with the same random numbers.
     const auto side = [&](Sampler& s, const auto& at) {
-        if (!c.contact) return at(0, s);
+        if (!c.contact && !c.extrapolate) return at(0, s);
         Sampler twice = s;
         const Color3f once = at(0, s);
         return once * 2.f - at(1, twice);
@@ -571,22 +662,31 @@ BoundarySample sample_boundary(const Scene& scene, const Silhouettes& sil, const
 
 constexpr uint64_t Salt = 0xB5AD4ECEDA1CE2A9ULL, GuideSalt = 0x2127599BF4325C37ULL;
 
-// Contrast guiding: edges are drawn with probability ∝ ℓ_e (½ + ½ c_e / c̄), a mixture of the projected length
-// ℓ_e and of ℓ_e c_e, where c_e is the RMS jump on the edge (the sum of the channels) measured by a pilot of a
-// few stratified crossings per edge and c̄ its length-weighted mean: an edge's share follows √E[jump²], the
-// density that minimizes the variance of a sum of jumps, while the uniform half keeps every edge's density
-// bounded below where the pilot saw nothing. The pilot (1/16 of the term's samples, at most 8 crossings per
-// edge, none when the edges outnumber it) only shapes the density: its samples are not in the estimate.
+// Contrast guiding: edges are drawn with probability ∝ ½ w_e / Σw + ½ ℓ_e c_e / Σ ℓ c, a mixture of the
+// prior weights w_e (the projected length ℓ_e, times a horizon crease's prior) and of ℓ_e c_e, where c_e is
+// the RMS jump on the edge (the sum of the channels) measured by a pilot of a few stratified crossings per
+// edge: an edge's share follows √E[jump²], the density that minimizes the variance of a sum of jumps, while
+// the prior half keeps every edge's density bounded below where the pilot saw nothing. The pilot (1/16 of the
+// term's samples, at most 8 crossings per edge; none when the edges it must pilot outnumber it) only shapes
+// the density: its samples are not in the estimate.
 void guide(const Scene& scene, Silhouettes& sil, const BoundaryOptions& options) {
     const Film& film = *scene.sensor->film;
     const uint64_t budget = uint64_t(film.width) * film.height * uint64_t(options.samples_per_pixel) / 16;
     const size_t n = sil.edges.size();
-    if (!options.guiding || n < 2 || budget < n) return;
-    const int per_edge = int(std::min<uint64_t>(8, budget / n));
+    // The edges piloted: all of them, or where they outnumber the pilot the silhouettes and shading creases
+    // (the horizon creases, many and faint on a finely tessellated smooth mesh, keep their prior weights).
+    std::vector<bool> piloted(n, true);
+    if (budget < n)
+        for (size_t e = 0; e < n; ++e)
+            piloted[e] = sil.edges[e].prior == 1.f;
+    const size_t m = size_t(std::count(piloted.begin(), piloted.end(), true));
+    if (!options.guiding || m < 2 || budget < m) return;
+    const int per_edge = int(std::min<uint64_t>(8, budget / m));
     std::vector<float> rms(n, 0.f);
     tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency());
     arena.execute([&] {
         tbb::parallel_for(size_t(0), n, [&](size_t e) {
+            if (!piloted[e]) return;
             check_interrupt();
             Sampler sampler;
             RayCounter rays;
@@ -602,19 +702,21 @@ void guide(const Scene& scene, Silhouettes& sil, const BoundaryOptions& options)
             rms[e] = float(std::sqrt(sum2 / per_edge));
         });
     });
-    double length = 0, weighted = 0;
-    for (size_t e = 0; e < n; ++e) length += sil.lengths[e], weighted += double(sil.lengths[e]) * rms[e];
+    double prior = 0, weighted = 0;
+    for (size_t e = 0; e < n; ++e)
+        if (piloted[e]) prior += sil.weights[e], weighted += double(sil.lengths[e]) * rms[e];
     if (!(weighted > 0) || !std::isfinite(weighted)) return;
-    const double mean = weighted / length;
-    std::vector<float> weights(n);
-    for (size_t e = 0; e < n; ++e) weights[e] = float(sil.lengths[e] * (0.5 + 0.5 * rms[e] / mean));
+    std::vector<float> weights(sil.weights);
+    for (size_t e = 0; e < n; ++e)
+        if (piloted[e])
+            weights[e] = float(0.5 * sil.weights[e] + 0.5 * sil.lengths[e] * rms[e] * prior / weighted);
     sil.distribution = DiscreteDistribution(all_weights(sil, weights));
 }
 
 // The edges seen by the camera, with their sampling density.
 std::unique_ptr<const Silhouettes> prepare(const Scene& scene, const SceneEdges& edges, const Parameters& params,
                                            const MaterialForm& form, const BoundaryOptions& options) {
-    auto sil = find_silhouettes(scene, edges, params, form.image_space_first_vertex());
+    auto sil = find_silhouettes(scene, edges, params, form.image_space_first_vertex(), options.path);
     if (!sil->edges.empty()) guide(scene, *sil, options);
     return sil;
 }
