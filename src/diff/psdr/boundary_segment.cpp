@@ -255,18 +255,8 @@ bool can_shadow_itself(const std::vector<SceneEdges::SceneEdge>& edges, size_t f
 // The edges of `edges` that can cast the shadows of `emitter` (see SceneEdges::lit).
 std::vector<uint32_t> shadow_edges(const SceneEdges& edges, const Emitter& emitter, const BoundingSphere& scene_bounds,
                                    const std::map<const Shape*, bool>& self_shadowing) {
-    BoundingSphere light{Vec3f(0.f), 0.f};
-    Vec3f travel(0.f); // directional lights: the direction of the light's rays
-    const bool environment = emitter.is_infinite() && !emitter.is_delta();
-    if (const Shape* shape = emitter.shape()) {
-        light = bounding_sphere(shape->mesh);
-    } else if (!environment) {
-        Interaction3f ref;
-        ref.p = scene_bounds.center;
-        const DirectionSample3f ds = emitter.sample_direction(ref, Vec2f(0.5f)).first;
-        if (emitter.is_infinite()) travel = ds.d * -1.f;
-        else light.center = ds.p;
-    }
+    const EmitterReach reach = emitter_reach(emitter, scene_bounds);
+    const BoundingSphere& light = reach.bounds;
     std::vector<uint32_t> out;
     for (uint32_t i = 0; i < edges.edges.size(); ++i) {
         const SceneEdges::SceneEdge& se = edges.edges[i];
@@ -274,10 +264,10 @@ std::vector<uint32_t> shadow_edges(const SceneEdges& edges, const Emitter& emitt
         const TriangleMesh& m = se.shape->mesh;
         const Vec3f a = m.positions[se.edge.v0];
         bool candidate;
-        if (environment) {
+        if (reach.environment) {
             candidate = !se.closed || convex_edge(se); // some direction grazes it
-        } else if (emitter.is_infinite()) {
-            candidate = grazes(se, travel);
+        } else if (reach.directional) {
+            candidate = grazes(se, reach.travel);
         } else {
             const auto plane_meets = [&](int32_t f) {
                 const Vec3f n = face_normal(m, f);
@@ -293,6 +283,24 @@ std::vector<uint32_t> shadow_edges(const SceneEdges& edges, const Emitter& emitt
 }
 
 } // namespace
+
+EmitterReach emitter_reach(const Emitter& emitter, const BoundingSphere& scene_bounds) {
+    EmitterReach out;
+    out.environment = emitter.is_infinite() && !emitter.is_delta();
+    if (const Shape* shape = emitter.shape()) {
+        out.bounds = bounding_sphere(shape->mesh);
+    } else if (!out.environment) {
+        Interaction3f ref;
+        ref.p = scene_bounds.center;
+        const DirectionSample3f ds = emitter.sample_direction(ref, Vec2f(0.5f)).first;
+        out.directional = emitter.is_infinite();
+        if (out.directional)
+            out.travel = ds.d * -1.f;
+        else
+            out.bounds.center = ds.p;
+    }
+    return out;
+}
 
 SceneEdges::SceneEdges(const Scene& scene) : media(scene_has_media(scene)) {
     std::map<const Shape*, bool> self_shadowing;

@@ -83,6 +83,17 @@ bool sample_grazing_direction(const SceneEdges::SceneEdge& edge, const Vec2f& u,
 // density: the mirror image of the wedge, of measure 2φ. False for other edges.
 bool sample_crease_direction(const SceneEdges::SceneEdge& edge, const Vec2f& u, Vec3f& d, float& pdf);
 
+// Where an emitter's light comes from, for choosing the edges its light can reach: every direction (an
+// environment), one direction of travel (a directional light), or the bounds of its positions (a mesh
+// light's bounding sphere; a point, spot or projector light's position, radius 0).
+struct EmitterReach {
+    bool environment = false;
+    bool directional = false;
+    Vec3f travel{0.f}; // directional: the direction of the light's rays
+    BoundingSphere bounds{Vec3f(0.f), 0.f};
+};
+EmitterReach emitter_reach(const Emitter& emitter, const BoundingSphere& scene_bounds);
+
 // The free flight (sample_interaction) from the edge point x_B along a direction `dir` that grazes the edge,
 // past hits on the edge's own faces: a grazing line meets them on the edge only, and a hit a hair's breadth
 // beyond x_B is the ray's rounding (a receiver or source at a grazing angle, with a huge weight). None

@@ -31,6 +31,7 @@ struct PrimaryBoundary::Silhouettes {
         const Shape* shape;
         Edge edge;
         bool crease;      // a shading discontinuity between two visible faces (not a silhouette)
+        bool horizon;     // a crease of smooth shading (lune_may_be_lit), not of the shading itself
         float prior;      // sampling weight per unit length before guiding (1; a horizon crease: wedge²)
         float tau0, tau1; // the part kept: edge parameters (v0 → v1) of its ends
         Vec2f s0, s1;     // their film positions (pixels)
@@ -41,8 +42,7 @@ struct PrimaryBoundary::Silhouettes {
         const Shape* shape;
         uint32_t prim;
     };
-    std::vector<float> lengths;        // of the edges' images
-    std::vector<float> weights;        // their lengths times their priors (before guiding)
+    std::vector<float> lengths; // of the edges' images
     std::vector<TerminatorTriangle> terminators;
     std::vector<float> terminator_weights; // the triangles' image sizes (pixels)
     // Over the edges, then the terminator triangles; points are uniform along an edge's image, and b1 is
@@ -107,24 +107,15 @@ bool shading_jumps(const Shape& shape, const Edge& e, bool textured) {
 // come from any direction; otherwise an emitter must reach into the wedge between the planes.
 struct LuneLights {
     bool everywhere = false;
-    std::vector<std::pair<const Shape*, BoundingSphere>> bounds; // area (its shape), point and spot lights
-    std::vector<Vec3f> directions;                               // toward directional lights
+    std::vector<std::pair<const Shape*, EmitterReach>> emitters; // with their shapes (mesh lights)
 };
 
 LuneLights lune_lights(const Scene& scene, const PathSettings& path) {
     LuneLights out;
     out.everywhere = path.max_depth < 0 || path.max_depth > 2 || scene_has_media(scene);
-    Interaction3f ref;
-    ref.p = scene.bounding_sphere().center;
     for (const auto& e : scene.emitters) {
-        if (e->is_infinite() && !e->is_delta())
-            out.everywhere = true;
-        else if (const Shape* shape = e->shape())
-            out.bounds.push_back({shape, bounding_sphere(shape->mesh)});
-        else if (e->is_infinite())
-            out.directions.push_back(e->sample_direction(ref, Vec2f(0.5f)).first.d);
-        else
-            out.bounds.push_back({nullptr, {e->sample_direction(ref, Vec2f(0.5f)).first.p, 0.f}});
+        out.emitters.push_back({e->shape(), emitter_reach(*e, scene.bounding_sphere())});
+        out.everywhere |= out.emitters.back().second.environment;
     }
     return out;
 }
@@ -147,16 +138,26 @@ bool lune_may_be_lit(const LuneLights& lights, const Shape& shape, const Edge& e
     wedge = std::acos(std::clamp(dot(n0, n1), -1.f, 1.f));
     if (!(wedge > MinHorizonWedge)) return false;
     if (lights.everywhere) return true;
-    for (const auto& [emitter_shape, b] : lights.bounds) {
+    for (const auto& [emitter_shape, reach] : lights.emitters) {
         if (emitter_shape == &shape) continue;
+        if (reach.directional) {
+            // The light (against its rays) above one plane and below the other.
+            if ((dot(n0, reach.travel) > 0.f) != (dot(n1, reach.travel) > 0.f)) return true;
+            continue;
+        }
+        const BoundingSphere& b = reach.bounds;
         const float d0 = dot(n0, b.center - a), d1 = dot(n1, b.center - a);
         if ((d0 > -b.radius && d1 < b.radius) || (d1 > -b.radius && d0 < b.radius)) return true;
     }
-    for (const Vec3f& d : lights.directions) {
-        const float s0 = dot(n0, d * -1.f), s1 = dot(n1, d * -1.f);
-        if ((s0 > 0.f) != (s1 > 0.f)) return true;
-    }
     return false;
+}
+
+// The edges' sampling weights before guiding: their images' lengths times their priors.
+std::vector<float> prior_weights(const Silhouettes& sil) {
+    std::vector<float> w(sil.edges.size());
+    for (size_t e = 0; e < w.size(); ++e)
+        w[e] = sil.lengths[e] * sil.edges[e].prior;
+    return w;
 }
 
 // The sampling weights: the edges' (`edge_weights`), then the terminator triangles'.
@@ -225,7 +226,7 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
         const TriangleMesh& m = se.shape->mesh;
         const Edge& e = se.edge;
         const bool silhouette = parallel ? is_silhouette_parallel(m, e, forward) : is_silhouette(m, e, eye);
-        bool crease = false;
+        bool crease = false, horizon = false;
         float prior = 1.f;
         if (!silhouette) {
             if (!image_space) continue;
@@ -238,6 +239,7 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
             float wedge = 0.f;
             if (!shading_jumps(*se.shape, e, textured)) {
                 if (!lune_may_be_lit(lights, *se.shape, e, wedge)) continue;
+                horizon = true;
                 prior = std::min(wedge * wedge, 1.f);
             }
             // On a solid, creases between faces turned away from the camera are hidden by the solid itself.
@@ -262,7 +264,8 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
         if (!clip_to_box(sa, sb, lo, hi, t0, t1)) continue;
         const float u0 = perspective_correct(t0, z_a, z_b, parallel), u1 = perspective_correct(t1, z_a, z_b, parallel);
         Silhouettes::SilhouetteEdge kept;
-        kept.shape = se.shape, kept.edge = e, kept.crease = crease, kept.prior = prior;
+        kept.shape = se.shape, kept.edge = e, kept.crease = crease, kept.horizon = horizon,
+        kept.prior = prior;
         kept.tau0 = tau0 + (tau1 - tau0) * u0, kept.tau1 = tau0 + (tau1 - tau0) * u1;
         kept.s0 = sa + (sb - sa) * t0, kept.s1 = sa + (sb - sa) * t1;
         kept.z0 = z_a + (z_b - z_a) * u0, kept.z1 = z_a + (z_b - z_a) * u1;
@@ -270,11 +273,10 @@ std::unique_ptr<Silhouettes> find_silhouettes(const Scene& scene, const SceneEdg
         if (!(length > 0.f) || !std::isfinite(length)) continue;
         out.edges.push_back(kept);
         out.lengths.push_back(length);
-        out.weights.push_back(length * prior);
     }
     if (image_space && sensor.projects_points() && !parallel) find_terminators(scene, params, lo, hi, out);
     if (!out.lengths.empty() || !out.terminators.empty())
-        out.distribution = DiscreteDistribution(all_weights(out, out.weights));
+        out.distribution = DiscreteDistribution(all_weights(out, prior_weights(out)));
     return result;
 }
 
@@ -315,7 +317,7 @@ struct EdgeCrossing {
     // curve (hit[0] on the edge's face, hit[1] on the surface) and at 2δ (twice_hit, the far one seen along
     // twice_ray), for their limits at the curve (probe_contact).
     bool contact = false;
-    // A horizon crease (SilhouetteEdge::prior < 1): both sides on their faces at δ and 2δ from the edge as
+    // A horizon crease (SilhouetteEdge::horizon): both sides on their faces at δ and 2δ from the edge as
     // well (twice_hit, seen along the same probes), for the limits at the edge.
     bool extrapolate = false;
     Ray twice_ray;
@@ -453,14 +455,13 @@ EdgeCrossing cross_edge(const Scene& scene, const Silhouettes::SilhouetteEdge& s
         // takes arrives along the planes), and the sides' distance δ from the edge reads that gradient as a
         // jump of order δ: the limits at the edge are extrapolated from δ and 2δ (2 L(δ) − L(2δ)).
         const float delta = 2.f * ray_offset_scale(x_edge);
-        out.extrapolate = se.prior < 1.f;
+        out.extrapolate = se.horizon;
         for (int k = 0; k < 2; ++k) {
             out.hit[k] = own_face(*se.shape, se.edge, out.tau, out.ray[k], delta);
             if (out.extrapolate)
                 out.twice_hit[k] = own_face(*se.shape, se.edge, out.tau, out.ray[k], 2.f * delta);
         }
-        out.twice_ray = out.ray[1];
-        out.twice_weight = out.weight[1];
+        if (out.extrapolate) out.twice_ray = out.ray[1], out.twice_weight = out.weight[1];
         out.valid = out.hit[0].is_valid() && out.hit[1].is_valid() &&
                     out.hit[0].prim_index != out.hit[1].prim_index &&
                     (!out.extrapolate || (out.twice_hit[0].is_valid() && out.twice_hit[1].is_valid()));
@@ -678,7 +679,7 @@ void guide(const Scene& scene, Silhouettes& sil, const BoundaryOptions& options)
     std::vector<bool> piloted(n, true);
     if (budget < n)
         for (size_t e = 0; e < n; ++e)
-            piloted[e] = sil.edges[e].prior == 1.f;
+            piloted[e] = !sil.edges[e].horizon;
     const size_t m = size_t(std::count(piloted.begin(), piloted.end(), true));
     if (!options.guiding || m < 2 || budget < m) return;
     const int per_edge = int(std::min<uint64_t>(8, budget / m));
@@ -702,14 +703,14 @@ void guide(const Scene& scene, Silhouettes& sil, const BoundaryOptions& options)
             rms[e] = float(std::sqrt(sum2 / per_edge));
         });
     });
+    std::vector<float> weights = prior_weights(sil);
     double prior = 0, weighted = 0;
     for (size_t e = 0; e < n; ++e)
-        if (piloted[e]) prior += sil.weights[e], weighted += double(sil.lengths[e]) * rms[e];
+        if (piloted[e]) prior += weights[e], weighted += double(sil.lengths[e]) * rms[e];
     if (!(weighted > 0) || !std::isfinite(weighted)) return;
-    std::vector<float> weights(sil.weights);
     for (size_t e = 0; e < n; ++e)
         if (piloted[e])
-            weights[e] = float(0.5 * sil.weights[e] + 0.5 * sil.lengths[e] * rms[e] * prior / weighted);
+            weights[e] = float(0.5 * weights[e] + 0.5 * sil.lengths[e] * rms[e] * prior / weighted);
     sil.distribution = DiscreteDistribution(all_weights(sil, weights));
 }
 
