@@ -279,8 +279,8 @@ inline void check_suite_scene(const PaperSuite& paper, const MethodCase& method,
                 method.label.c_str(), describe(total).c_str());
     EXPECT_TRUE(total.passes()) << describe(total);
     if (d.terms[0].name == "interior") {
-        const DiffCheck interior =
-            check_against(d.terms[0].derivative, d.terms[0].stderr_img, fd.derivative, fd.stderr_img);
+        const DiffCheck interior = check_against(d.terms[0].derivative, d.terms[0].stderr_img, fd.derivative,
+                                                 fd.stderr_img, d.terms[0].block_stderr, fd.block_stderr);
         std::printf("  interior only: %s\n", describe(interior).c_str());
         EXPECT_FALSE(interior.passes())
             << "the interior term alone should miss the boundary contribution: " << describe(interior);

@@ -30,7 +30,11 @@ FiniteDifference finite_difference(Scene& scene, Parameters& params, double h, c
     }
     params.displace(scene, 0.0);
 
-    FiniteDifference fd{estimates.mean(), estimates.standard_error(), 0.0, estimates.mean_standard_error()};
+    FiniteDifference fd{estimates.mean(),
+                        estimates.standard_error(),
+                        0.0,
+                        estimates.mean_standard_error(),
+                        {estimates.block_standard_error(2), estimates.block_standard_error(4)}};
     fd.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return fd;
 }

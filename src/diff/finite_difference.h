@@ -4,6 +4,7 @@
 #include "core/image.h"
 #include "diff/parameters.h"
 #include "render/render.h"
+#include <array>
 
 namespace penumbra {
 
@@ -12,6 +13,8 @@ struct FiniteDifference {
     Image stderr_img;  // per-pixel standard error from independent batches (empty with one batch)
     double seconds = 0;
     double mean_stderr = 0; // of the image's mean, from the batches' means (0 with one batch, or stored)
+    std::array<Image, 2>
+        block_stderr{}; // of the 2 × 2 and 4 × 4 block means, from the batches (empty: stored)
 };
 
 // Renders with the scene's integrator at θ0 ± h·direction (same seeds on both sides, film positions stratified

@@ -194,12 +194,13 @@ DerivativeImage pixel_derivative(const PixelLoop& loop) {
     result.derivative = derivative.mean();
     result.stderr_img = derivative.standard_error();
     result.mean_stderr = derivative.mean_standard_error();
+    result.block_stderr = {derivative.block_standard_error(2), derivative.block_standard_error(4)};
     result.primal = primal.mean();
     result.description = loop.description;
     result.cost = cost.get();
     result.seconds = seconds_since(loop.start);
-    result.terms.push_back(
-        {loop.term, result.derivative, result.stderr_img, result.cost, result.seconds, result.mean_stderr});
+    result.terms.push_back({loop.term, result.derivative, result.stderr_img, result.cost, result.seconds,
+                            result.mean_stderr, result.block_stderr});
     return result;
 }
 

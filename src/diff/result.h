@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "core/image.h"
 #include "diff/sample_cost.h"
+#include <array>
 
 #include <limits>
 #include <string>
@@ -21,6 +22,7 @@ struct DerivativeTerm {
     SampleCost cost;
     double seconds = 0;
     double mean_stderr = 0; // of the image's mean, from the batches' means (DerivativeImage::mean_stderr)
+    std::array<Image, 2> block_stderr{}; // of its 2 × 2 and 4 × 4 block means (DerivativeImage::block_stderr)
 };
 
 struct DerivativeImage {
@@ -33,6 +35,9 @@ struct DerivativeImage {
     // means: pixel errors correlate (a sample splats over the filter's pixels, a path carries all three
     // channels, photons are shared), so sqrt(Σσ²)/N understates it. 0 with a single batch.
     double mean_stderr = 0;
+    // The standard errors of the 2 × 2 and 4 × 4 block means (ImageBatches::Blocks), from the batches' block
+    // means for the same reason (empty with a single batch).
+    std::array<Image, 2> block_stderr{};
     std::string description;           // one line for the log ("interior + boundary terms (...)")
     std::vector<std::string> warnings; // what the estimate leaves out, for the user
     double seconds = 0;

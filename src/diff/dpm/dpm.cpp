@@ -278,12 +278,14 @@ DerivativeImage dpm_derivative(const Scene& scene, const Parameters& params, con
     out.stderr_img = derivative_batches.standard_error();
     out.primal = primal_batches.mean();
     out.mean_stderr = derivative_batches.mean_standard_error();
+    out.block_stderr = {derivative_batches.block_standard_error(2),
+                        derivative_batches.block_standard_error(4)};
     out.description = describe(o);
     out.warnings = settings_warnings(scene);
     out.cost.dropped = dropped.load();
     out.seconds = seconds_since(start);
     out.terms.push_back({o.variant == DpmVariant::C ? "photon-mapping" : "contribution", out.derivative,
-                         out.stderr_img, out.cost, out.seconds, out.mean_stderr});
+                         out.stderr_img, out.cost, out.seconds, out.mean_stderr, out.block_stderr});
     if (screen) {
         out.terms.push_back({"screen_x", x_batches.mean(), x_batches.standard_error(), {}, 0.0});
         out.terms.push_back({"screen_y", y_batches.mean(), y_batches.standard_error(), {}, 0.0});

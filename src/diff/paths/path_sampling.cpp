@@ -186,6 +186,8 @@ DerivativeImage path_sampling_derivative(const Scene& scene, const Parameters& p
     DerivativeImage d;
     d.derivative = derivative.mean();
     d.stderr_img = derivative.standard_error();
+    d.mean_stderr = derivative.mean_standard_error();
+    d.block_stderr = {derivative.block_standard_error(2), derivative.block_standard_error(4)};
     d.primal = primal.mean();
     d.description = "path sampling: " + describe(o);
     d.seconds = seconds_since(start);

@@ -202,6 +202,13 @@ bool sample_grazing_direction(const SceneEdges::SceneEdge& se, const Vec2f& u, V
     return true;
 }
 
+float grazing_direction_pdf(const SceneEdges::SceneEdge& se, const Vec3f& d) {
+    if (se.edge.f1 < 0) return warp::square_to_uniform_sphere_pdf();
+    if (!grazes(se, d)) return 0.f;
+    const float arc = Pi - std::abs(edge_azimuths(se).phi1);
+    return arc > 0.f ? 1.f / (4.f * arc) : 0.f;
+}
+
 bool sample_crease_direction(const SceneEdges::SceneEdge& se, const Vec2f& u, Vec3f& d, float& pdf) {
     const Edge& e = se.edge;
     if (e.f1 < 0 || !se.closed || !convex_edge(se)) return false;

@@ -77,6 +77,8 @@ bool grazes(const SceneEdges::SceneEdge& edge, const Vec3f& d);
 // azimuths around the edge outside the wedge and its mirror image, of measure 4(π − φ); boundary edges graze
 // along any direction (density 1/4π). False when no direction grazes (a concave edge of a solid).
 bool sample_grazing_direction(const SceneEdges::SceneEdge& edge, const Vec2f& u, Vec3f& d, float& pdf);
+// The solid-angle density with which sample_grazing_direction draws d (0 where d does not graze the edge).
+float grazing_direction_pdf(const SceneEdges::SceneEdge& edge, const Vec3f& d);
 
 // A direction d, uniform over the lines through a convex edge of a solid that leave it there (in front of
 // both faces: from a point on such a line the edge is a crease, not a silhouette), with its solid-angle

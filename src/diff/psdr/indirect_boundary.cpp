@@ -12,7 +12,8 @@ namespace penumbra {
 
 namespace {
 
-constexpr uint64_t EmitterSalt = 0xD1B54A32D192ED03ULL, DirectionalSalt = 0x8CB92BA72F3D8DD7ULL;
+constexpr uint64_t EmitterSalt = 0xD1B54A32D192ED03ULL, DirectionalSalt = 0x8CB92BA72F3D8DD7ULL,
+                   CameraSalt = 0x94D049BB133111EBULL;
 
 // Deepest detector vertex for a boundary segment whose source subpath has at least `source_segments` segments
 // (-1: unbounded): the whole path camera → x_Dt … x_D0 → x_S0 → … has t + 2 + source_segments − 1 segments.
@@ -103,12 +104,56 @@ BoundarySample sample_contact_face(const Scene& scene, const SceneEdges& edges, 
     return out;
 }
 
+// The camera technique of the lit side (sample_from_camera): x_D0 where a camera ray through a film point
+// uniform over the image and its filter's margin first meets the scene, the edge point x_B drawn by the edge
+// tree as seen from x_D0 toward the camera; the line x_B → x_D0 is then traced as Algorithm 1 traces it. It
+// samples the segments whose receiver the camera sees (t = 0) in proportion to the receiver's lobe toward the
+// edges, where Algorithm 1's uniform directions rarely find the lobe of a glossy receiver (a hedge's edges in
+// a glossy floor). The two are combined by the balance heuristic (equal sample counts) on those segments.
+// Only in vacuum, with a camera that projects points and no null surfaces (where the first surface a camera
+// ray meets is the receiver the camera connection sees).
+struct CameraEdges {
+    const SceneEdges& edges;
+    const EdgeTree& tree;
+    // The film rectangle the camera rays pass through, its filter's margin included (pixels²).
+    float film_area;
+    CameraEdges(const SceneEdges& e, const EdgeTree& t, const Film& film)
+        : edges(e), tree(t), film_area(float(film.width + 2.f * film.rfilter->radius()) *
+                                       float(film.height + 2.f * film.rfilter->radius())) {}
+};
+
+bool camera_technique_applies(const Scene& scene, const SceneEdges& edges) {
+    if (edges.media || edges.empty() || scene.sensor->medium || !scene.sensor->projects_points())
+        return false;
+    for (const auto& shape : scene.shapes)
+        if (shape->bsdf && shape->bsdf->has(BSDFNull)) return false;
+    return true;
+}
+
+// The camera technique's density of the lit side's segment through x_B to the receiver seen from the camera,
+// per unit length of x_B and solid angle of ω_B: the film point's density |ds/dA(x_D0)| / area, the edge
+// tree's, and dA(x_D0) = r_D² / |cos φ_D| dσ(ω_B).
+float camera_density(const Scene& scene, const CameraEdges& camera, const BoundarySegment& seg,
+                     const EdgePoint& x_b) {
+    const SurfaceInteraction3f& x = seg.receiver;
+    Vec2f s;
+    float jacobian;
+    if (!(seg.cos_receiver > 0.f) || !scene.sensor->film_position(x.p, x.n, s, jacobian)) return 0.f;
+    const EdgeViewer viewer(x, scene.sensor->to_sensor(x.p));
+    const float p_edge = camera.tree.pdf(viewer, x_b);
+    return jacobian / camera.film_area * p_edge * squared_norm(x.p - x_b.p) / seg.cos_receiver;
+}
+
 // The lit side of the line through x_B along ω_B (Algorithm 1 of paper 001, lines 4–): x_S0 by a free flight
 // behind x_B, the segment on to x_D0, the radiance x_S0 sends along it. Returns the segment (invalid when the
 // line has no source or no receiver).
+// `camera`: the camera technique when it applies, whose density weighs the connection of x_D0 itself (the
+// balance heuristic); `seen`: the receiver the camera technique drew this line for (then only x_D0's own
+// connection is made, and only if the line reaches that receiver).
 BoundarySegment add_lit_side(const Scene& scene, const SegmentContext& context, const PathSettings& settings,
                              const EdgePoint& x_b, const Vec3f& w_b, float edge_weight, float pdf_w,
-                             const std::optional<Contact>& contact, Sampler& sampler, RayCounter& rays,
+                             const std::optional<Contact>& contact, const CameraEdges* camera,
+                             const SurfaceInteraction3f* seen, Sampler& sampler, RayCounter& rays,
                              BoundarySample& out) {
     // x_S0 (line 4): a free flight behind x_B along −ω_B, ending at a medium vertex or the first surface.
     // The medium around x_B: a line grazing an edge passes outside the edge's shape (its exterior medium, if the
@@ -134,11 +179,20 @@ BoundarySegment add_lit_side(const Scene& scene, const SegmentContext& context, 
     }
     const BoundarySegment seg = trace_boundary_segment(scene, context, source, x_b, sampler, rays, contact);
     if (!seg.valid) return seg;
+    if (seen && (seg.receiver.shape != seen->shape || seg.receiver.prim_index != seen->prim_index))
+        return seg;
 
     DetectorConnections connections;
-    detector_connections(scene, context.form, seg, 0, max_detector_depth(settings, 2), settings, sampler,
-                         rays, connections);
+    detector_connections(scene, context.form, seg, 0, seen ? 0 : max_detector_depth(settings, 2), settings,
+                         sampler, rays, connections);
     if (connections.count == 0) return seg;
+    // The balance heuristic on x_D0's own connection: 1 / p_directional becomes 1 / (p_directional +
+    // p_camera).
+    if (camera && connections.items[0].t == 0) {
+        const float p_directional = pdf_w / edge_weight;
+        const float p_camera = camera_density(scene, *camera, seg, x_b);
+        connections.items[0].weight *= p_directional / (p_directional + p_camera);
+    }
 
     // G(x_S0, x_D0) times the Jacobian of Eqs. 40–43 over the density of (x_B, ω_B): for two surface vertices
     //   |cos φ_S| |cos φ_D| / r² · r_S² / |cos φ_S| · stretch = |cos φ_D| r_S² stretch / r²,
@@ -256,8 +310,8 @@ void add_attached_crease(const Scene& scene, const SegmentContext& context, cons
 // (surface or medium vertices); under the contact flow also the line's attached dark side, and a crease line
 // through the same edge point.
 BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, const SegmentContext& context,
-                                  const PathSettings& settings, const BoundarySampleIndex& index,
-                                  Sampler& sampler, RayCounter& rays) {
+                                  const CameraEdges* camera, const PathSettings& settings,
+                                  const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
     BoundarySample out;
     const int t_max = max_detector_depth(settings, 2);
     if (settings.max_depth >= 0 && t_max < 0) return out;
@@ -280,8 +334,8 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
     if (!sample_grazing_direction(*x_b.edge, sampler.next_2d(), w_b, pdf_w)) return out;
     // Over the density of x_B (and that of ω_B).
     const float edge_weight = edges.all.total_length * strategy_weight;
-    const BoundarySegment lit =
-        add_lit_side(scene, context, settings, x_b, w_b, edge_weight, pdf_w, contact, sampler, rays, out);
+    const BoundarySegment lit = add_lit_side(scene, context, settings, x_b, w_b, edge_weight, pdf_w, contact,
+                                             camera, nullptr, sampler, rays, out);
     if (!(contact && contact->valid())) {
         add_attached_dark_side(scene, context, settings, x_b, w_b, edge_weight / pdf_w, lit, sampler, rays, out);
         add_attached_crease(scene, context, settings, x_b, edge_weight, sampler, rays, out);
@@ -289,42 +343,97 @@ BoundarySample sample_directional(const Scene& scene, const SceneEdges& edges, c
     return out;
 }
 
+// The camera technique (CameraEdges): a film point stratified over the samples, the receiver x_D0 the camera
+// ray meets, an edge point drawn by the edge tree from x_D0, and the lit side of the line x_B → x_D0 with
+// x_D0's own camera connection.
+BoundarySample sample_from_camera(const Scene& scene, const SceneEdges& edges, const SegmentContext& context,
+                                  const CameraEdges& camera, const PathSettings& settings,
+                                  const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+    BoundarySample out;
+    if (settings.max_depth >= 0 && max_detector_depth(settings, 2) < 0) return out;
+    const Sensor& sensor = *scene.sensor;
+    const Film& film = *sensor.film;
+    const float margin = film.rfilter->radius();
+    const uint64_t pixels = uint64_t(film.width) * uint64_t(film.height);
+    const uint64_t cell = std::min(uint64_t(double(index.stratified(sampler)) * double(pixels)), pixels - 1);
+    const Vec2f jitter = sampler.next_2d();
+    const Vec2f s(-margin + (float(cell % uint64_t(film.width)) + jitter.x) * (film.width + 2.f * margin) /
+                                float(film.width),
+                  -margin + (float(cell / uint64_t(film.width)) + jitter.y) * (film.height + 2.f * margin) /
+                                float(film.height));
+    const Ray ray = sensor.sample_ray(s, Vec2f(0.5f)).first;
+    ++rays.rays;
+    const SurfaceInteraction3f seen = scene.intersect(ray);
+    if (!seen.is_valid() || !seen.bsdf() || !seen.bsdf()->has(BSDFSmooth)) return out;
+    float pdf_edge;
+    const EdgeViewer viewer(seen, ray.d * -1.f);
+    const float u_edge = sampler.next_1d();
+    const EdgePoint x_b = camera.tree.sample(viewer, u_edge, sampler.next_1d(), pdf_edge);
+    if (!(pdf_edge > 0.f)) return out;
+    const Vec3f w_b = normalize(seen.p - x_b.p);
+    const float pdf_w = grazing_direction_pdf(*x_b.edge, w_b);
+    if (!(pdf_w > 0.f)) return out;
+    std::optional<Contact> contact = resting_contact(scene, *x_b.edge, x_b.p, rays);
+    const float edge_weight = edges.all.total_length * (contact->valid() ? 2.f : 1.f);
+    add_lit_side(scene, context, settings, x_b, w_b, edge_weight, pdf_w, contact, &camera, &seen, sampler,
+                 rays, out);
+    return out;
+}
+
+// Runs `term(salt, sample)` for each technique: emitter sources, Algorithm 1 and, with `tree`, the camera
+// technique.
+template <typename Term>
+void for_each_technique(const Scene& scene, const SceneEdges& edges, const EdgeTree* tree,
+                        const Parameters& params, const BoundaryOptions& options, const Term& term) {
+    const MaterialForm form(scene, params, options.first_vertex);
+    const SegmentContext context{form, options.volume_endpoints, edges.media};
+    const int t_max = max_detector_depth(options.path, 1);
+    if (!scene.emitters.empty() && (t_max < 0 || t_max >= 1)) {
+        term(EmitterSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+            return sample_emitter_boundary(scene, edges, context, 1, t_max, options.path, index, sampler,
+                                           rays);
+        });
+    }
+    const std::optional<CameraEdges> camera =
+        tree ? std::optional<CameraEdges>(std::in_place, edges, *tree, *scene.sensor->film) : std::nullopt;
+    const CameraEdges* cam = camera ? &*camera : nullptr;
+    term(DirectionalSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+        return sample_directional(scene, edges, context, cam, options.path, index, sampler, rays);
+    });
+    if (cam) {
+        term(CameraSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
+            return sample_from_camera(scene, edges, context, *cam, options.path, index, sampler, rays);
+        });
+    }
+}
+
 } // namespace
+
+IndirectBoundary::IndirectBoundary(const Scene& scene, const SceneEdges& edges)
+    : scene_(scene), edges_(edges) {
+    if (camera_technique_applies(scene, edges)) camera_edges_.emplace(edges);
+}
 
 Image IndirectBoundary::derivative(const Parameters& params, const BoundaryOptions& options) const {
     const Film& film = *scene_.sensor->film;
     Image result(film.width, film.height);
     if (edges_.empty()) return result;
-    const MaterialForm form(scene_, params, options.first_vertex);
-    const SegmentContext context{form, options.volume_endpoints, edges_.media};
-    const int t_max = max_detector_depth(options.path, 1);
-    if (!scene_.emitters.empty() && (t_max < 0 || t_max >= 1)) {
-        result = boundary_derivative(scene_, params, options, EmitterSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
-            return sample_emitter_boundary(scene_, edges_, context, 1, t_max, options.path, index, sampler, rays);
-        });
-    }
-    const Image directional =
-        boundary_derivative(scene_, params, options, DirectionalSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
-            return sample_directional(scene_, edges_, context, options.path, index, sampler, rays);
-        });
-    for (size_t i = 0; i < result.pixels.size(); ++i) result.pixels[i] += directional.pixels[i];
+    for_each_technique(scene_, edges_, camera_edges_ ? &*camera_edges_ : nullptr, params, options,
+                       [&](uint64_t salt, const auto& sample) {
+                           const Image part = boundary_derivative(scene_, params, options, salt, sample);
+                           for (size_t i = 0; i < result.pixels.size(); ++i)
+                               result.pixels[i] += part.pixels[i];
+                       });
     return result;
 }
 
 void IndirectBoundary::gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
                                 std::vector<double>& gradient) const {
     if (edges_.empty()) return;
-    const MaterialForm form(scene_, params, options.first_vertex);
-    const SegmentContext context{form, options.volume_endpoints, edges_.media};
-    const int t_max = max_detector_depth(options.path, 1);
-    if (!scene_.emitters.empty() && (t_max < 0 || t_max >= 1)) {
-        boundary_gradient(scene_, params, adjoint, options, EmitterSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
-            return sample_emitter_boundary(scene_, edges_, context, 1, t_max, options.path, index, sampler, rays);
-        }, gradient);
-    }
-    boundary_gradient(scene_, params, adjoint, options, DirectionalSalt, [&](const BoundarySampleIndex& index, Sampler& sampler, RayCounter& rays) {
-        return sample_directional(scene_, edges_, context, options.path, index, sampler, rays);
-    }, gradient);
+    for_each_technique(scene_, edges_, camera_edges_ ? &*camera_edges_ : nullptr, params, options,
+                       [&](uint64_t salt, const auto& sample) {
+                           boundary_gradient(scene_, params, adjoint, options, salt, sample, gradient);
+                       });
 }
 
 } // namespace penumbra

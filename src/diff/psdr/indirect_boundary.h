@@ -15,21 +15,24 @@
 #pragma once
 #include "diff/boundary_driver.h"
 #include "diff/psdr/boundary_segment.h"
+#include "diff/psdr/edge_tree.h"
 
+#include <optional>
 
 namespace penumbra {
 
 class IndirectBoundary final : public BoundaryTerm {
 public:
     // `edges` (the scene's discontinuity edges) must outlive the estimator.
-    IndirectBoundary(const Scene& scene, const SceneEdges& edges) : scene_(scene), edges_(edges) {}
-    Image derivative(const Parameters& params, const BoundaryOptions& options) const override;
-    void gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
-                  std::vector<double>& gradient) const override;
+  IndirectBoundary(const Scene& scene, const SceneEdges& edges);
+  Image derivative(const Parameters& params, const BoundaryOptions& options) const override;
+  void gradient(const Parameters& params, const Image& adjoint, const BoundaryOptions& options,
+                std::vector<double>& gradient) const override;
 
 private:
     const Scene& scene_;
     const SceneEdges& edges_;
+    std::optional<EdgeTree> camera_edges_; // the camera technique's edge tree, where the technique applies
 };
 
 } // namespace penumbra

@@ -37,6 +37,7 @@ void boundary_batches(const Scene& scene, const Parameters& params, const PsdrOp
     out.derivative = batches.mean();
     if (B > 1) out.stderr_img = batches.standard_error();
     out.mean_stderr = batches.mean_standard_error();
+    out.block_stderr = {batches.block_standard_error(2), batches.block_standard_error(4)};
 }
 
 // The primary, direct and indirect boundary terms connect surface points to a single center of projection:
@@ -128,7 +129,20 @@ DerivativeImage psdr_derivative(const Scene& scene, const Parameters& params, co
                                                float(std::sqrt(variance.z)));
     }
     const bool pixel_term = needs_pixel_boundary(scene, params, options.interior.first_vertex);
+    // The terms use independent samples: variances add (of the image mean and of block means, as per pixel).
     double mean_variance = 0;
+    for (size_t b = 0; b < out.block_stderr.size(); ++b) {
+        Image& sum = out.block_stderr[b];
+        for (const DerivativeTerm& t : terms) {
+            const Image& e = t.block_stderr[b];
+            if (e.pixels.empty()) continue;
+            if (sum.pixels.empty()) sum = Image(e.width, e.height);
+            for (size_t i = 0; i < e.pixels.size(); ++i)
+                sum.pixels[i] += e.pixels[i] * e.pixels[i];
+        }
+        for (Color3f& v : sum.pixels)
+            v = Color3f(std::sqrt(v.x), std::sqrt(v.y), std::sqrt(v.z));
+    }
     for (size_t k = 0; k < terms.size(); ++k) {
         out.cost += terms[k].cost;
         mean_variance += terms[k].mean_stderr * terms[k].mean_stderr;
