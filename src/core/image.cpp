@@ -240,4 +240,37 @@ void write_png(const std::string& path, int width, int height, int channels,
         path, [&](const std::string& tmp) { write_png_data(tmp, width, height, channels, values); });
 }
 
+namespace {
+
+// Σ (or Σ of squares) of each k × k block, with the block's pixel count.
+template <typename F> Image block_reduce(const Image& image, int k, const F& per_pixel, bool root_of_sum) {
+    const int w = (image.width + k - 1) / k, h = (image.height + k - 1) / k;
+    Image out(w, h);
+    for (int by = 0; by < h; ++by)
+        for (int bx = 0; bx < w; ++bx) {
+            Vec3d sum(0.0);
+            int count = 0;
+            for (int y = by * k; y < std::min(image.height, (by + 1) * k); ++y)
+                for (int x = bx * k; x < std::min(image.width, (bx + 1) * k); ++x, ++count)
+                    sum += per_pixel(Vec3d(image.at(x, y)));
+            if (root_of_sum) sum = Vec3d(std::sqrt(sum.x), std::sqrt(sum.y), std::sqrt(sum.z));
+            out.at(bx, by) = Color3f(sum / double(count));
+        }
+    return out;
+}
+
+} // namespace
+
+Image block_average(const Image& image, int k) {
+    if (image.pixels.empty()) return image;
+    return block_reduce(
+        image, k, [](const Vec3d& v) { return v; }, false);
+}
+
+Image block_average_stderr(const Image& stderr_img, int k) {
+    if (stderr_img.pixels.empty()) return stderr_img;
+    return block_reduce(
+        stderr_img, k, [](const Vec3d& s) { return s * s; }, true);
+}
+
 } // namespace penumbra

@@ -25,6 +25,13 @@ constexpr int64_t MaxImagePixels = int64_t(1) << 28;
 // Reads EXR (linear) or an 8-bit/HDR format via stb; 8-bit images are converted from sRGB to linear when
 // `srgb_to_linear` is set (Mitsuba's `raw=false`). Throws Error naming the file on failure, and for images of
 // more than `max_pixels` pixels.
+// The image averaged over k × k blocks (partial blocks at the right and bottom edges averaged over what they
+// hold), and its standard error from per-pixel standard errors (pixels independent). Noise averages out over
+// a block while a bias does not: relerr after 4 × 4 block averaging ("relerr4") is the accuracy measure of
+// the estimator suite.
+Image block_average(const Image& image, int k);
+Image block_average_stderr(const Image& stderr_img, int k);
+
 Image read_image(const std::string& path, bool srgb_to_linear = true, int64_t max_pixels = MaxImagePixels);
 // Writes by extension: .exr (32-bit float RGB) or .png (sRGB-encoded, clamped 8-bit). The file is written to a
 // temporary name and renamed, so a failed write never leaves a partial file. Throws Error on failure.

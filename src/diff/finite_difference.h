@@ -35,11 +35,4 @@ struct Comparison {
 Comparison compare_images(const Image& test, const Image& ref, const Image& test_stderr = Image(),
                           const Image& ref_stderr = Image());
 
-// The image averaged over k × k blocks (partial blocks at the right and bottom edges averaged over what they
-// hold), and its standard error from per-pixel standard errors (pixels independent). Noise averages out over a
-// block while a bias does not: relerr after 4 × 4 block averaging ("relerr4") is the accuracy measure of the
-// estimator suite.
-Image block_average(const Image& image, int k);
-Image block_average_stderr(const Image& stderr_img, int k);
-
 } // namespace penumbra

@@ -194,7 +194,7 @@ DerivativeImage pixel_derivative(const PixelLoop& loop) {
     result.derivative = derivative.mean();
     result.stderr_img = derivative.standard_error();
     result.mean_stderr = derivative.mean_standard_error();
-    result.block_stderr = {derivative.block_standard_error(2), derivative.block_standard_error(4)};
+    result.block_stderr = derivative.block_standard_errors();
     result.primal = primal.mean();
     result.description = loop.description;
     result.cost = cost.get();

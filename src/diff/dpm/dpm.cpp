@@ -278,8 +278,7 @@ DerivativeImage dpm_derivative(const Scene& scene, const Parameters& params, con
     out.stderr_img = derivative_batches.standard_error();
     out.primal = primal_batches.mean();
     out.mean_stderr = derivative_batches.mean_standard_error();
-    out.block_stderr = {derivative_batches.block_standard_error(2),
-                        derivative_batches.block_standard_error(4)};
+    out.block_stderr = derivative_batches.block_standard_errors();
     out.description = describe(o);
     out.warnings = settings_warnings(scene);
     out.cost.dropped = dropped.load();

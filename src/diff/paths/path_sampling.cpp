@@ -187,7 +187,7 @@ DerivativeImage path_sampling_derivative(const Scene& scene, const Parameters& p
     d.derivative = derivative.mean();
     d.stderr_img = derivative.standard_error();
     d.mean_stderr = derivative.mean_standard_error();
-    d.block_stderr = {derivative.block_standard_error(2), derivative.block_standard_error(4)};
+    d.block_stderr = derivative.block_standard_errors();
     d.primal = primal.mean();
     d.description = "path sampling: " + describe(o);
     d.seconds = seconds_since(start);

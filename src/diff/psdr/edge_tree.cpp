@@ -1,7 +1,7 @@
 #include "diff/psdr/edge_tree.h"
 
 #include <algorithm>
-#include <numeric>
+#include <limits>
 
 namespace penumbra {
 

@@ -37,7 +37,7 @@ void boundary_batches(const Scene& scene, const Parameters& params, const PsdrOp
     out.derivative = batches.mean();
     if (B > 1) out.stderr_img = batches.standard_error();
     out.mean_stderr = batches.mean_standard_error();
-    out.block_stderr = {batches.block_standard_error(2), batches.block_standard_error(4)};
+    out.block_stderr = batches.block_standard_errors();
 }
 
 // The primary, direct and indirect boundary terms connect surface points to a single center of projection:
